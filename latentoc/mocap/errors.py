@@ -1,0 +1,21 @@
+"""Errors raised by the Acclaim ASF/AMC readers."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class MocapFormatError(ValueError):
+    """A malformed ASF or AMC file.
+
+    Carries the offending ``path`` and 1-based ``line`` number (``None`` when the
+    problem is not tied to a single line); the message names both.
+    """
+
+    def __init__(self, path: str | Path | None, line: int | None, message: str) -> None:
+        self.path = None if path is None else str(path)
+        self.line = line
+        self.reason = message
+        where = self.path if self.path is not None else "<text>"
+        if line is not None:
+            where = f"{where}, line {line}"
+        super().__init__(f"{where}: {message}")
