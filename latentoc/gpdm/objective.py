@@ -1,0 +1,229 @@
+"""Negative log posterior of the GPDM, Eq. 16 of Kang & Park (2015), with its
+exact analytic gradient.
+
+Variables are packed as ``v = [vec(X), ln alpha (4), ln beta (3)]`` (X row major,
+N x d).  The scale matrix ``W = diag(w)`` is held fixed inside one inner
+optimisation and updated in closed form between outer iterations
+(:func:`optimal_w`).
+
+The value returned by :func:`neg_log_posterior` is (constants dropped)::
+
+    L = lam * [ d/2 ln|K_X| + 1/2 tr(K_X^-1 X_out X_out^T) ]
+        + D/2 ln|K_Y| + 1/2 tr(K_Y^-1 Y W^2 Y^T) - N ln|W|
+        + sum_i ln alpha_i + sum_i ln beta_i + 1/2 sum_s |x_1^(s)|^2
+
+i.e. Eq. 16 plus the N(0, I) prior on the first latent point of every sequence
+(the ``p(x_1)`` factor of Eq. 14).  ``lam`` is 1 for the plain GPDM and D/d for
+the balanced GPDM of Urtasun et al. (2006).  With several sequences, X_in and
+X_out are built per sequence (:func:`sequence_indices`) and K_X is the kernel
+matrix of the stacked X_in.
+
+Gradient in matrix form: with G = dL/dK = 1/2 (c K^-1 - K^-1 T T^T K^-1)
+(c = D, T = Y W for K_Y; c = d, T = X_out for K_X) the derivative with respect to
+the points of an RBF kernel is  -2 b2 (diag(M 1) X - M X),  M = G o K_rbf, and
+with respect to the linear part 2 alpha3 G X_in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.linalg import lapack
+
+from .kernels import sq_dist
+
+__all__ = [
+    "GPDMProblem",
+    "sequence_indices",
+    "pack",
+    "unpack",
+    "safe_cholesky",
+    "chol_inverse",
+    "neg_log_posterior",
+    "optimal_w",
+    "KAPPA_SQ",
+]
+
+KAPPA_SQ = 1e6
+
+
+def sequence_indices(sequence_lengths: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row indices (into the stacked X) of X_in, X_out and the sequence starts.
+
+    For each sequence with rows s..e-1: X_in gets s..e-2, X_out gets s+1..e-1
+    (Eq. 14, per sequence); the first row s has no predecessor.
+    """
+    ins, outs, firsts = [], [], []
+    start = 0
+    for n in sequence_lengths:
+        n = int(n)
+        firsts.append(start)
+        ins.append(np.arange(start, start + n - 1))
+        outs.append(np.arange(start + 1, start + n))
+        start += n
+    return (np.concatenate(ins).astype(int), np.concatenate(outs).astype(int),
+            np.asarray(firsts, dtype=int))
+
+
+@dataclass
+class GPDMProblem:
+    """Fixed data of one learning problem: centred data and sequence structure."""
+
+    Y: np.ndarray  # centred data, N x D
+    sequence_lengths: list[int]
+    latent_dim: int
+    dynamics_weight: float = 1.0  # lambda (D/d for balanced GPDM)
+    in_idx: np.ndarray = field(init=False)
+    out_idx: np.ndarray = field(init=False)
+    first_idx: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.Y = np.asarray(self.Y, dtype=float)
+        self.in_idx, self.out_idx, self.first_idx = sequence_indices(self.sequence_lengths)
+
+    @property
+    def N(self) -> int:
+        return self.Y.shape[0]
+
+    @property
+    def D(self) -> int:
+        return self.Y.shape[1]
+
+
+def pack(X: np.ndarray, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """Pack latent points and log-hyperparameters into one vector."""
+    return np.concatenate([np.asarray(X, float).ravel(), np.log(alpha), np.log(beta)])
+
+
+def unpack(v: np.ndarray, N: int, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Inverse of :func:`pack`: returns X (N x d), alpha (4,), beta (3,)."""
+    n = N * d
+    return v[:n].reshape(N, d), np.exp(v[n:n + 4]), np.exp(v[n + 4:n + 7])
+
+
+def safe_cholesky(K: np.ndarray, max_tries: int = 8) -> tuple[np.ndarray, float]:
+    """Lower Cholesky factor of K; adds growing diagonal jitter if K is not PD.
+
+    Returns (L, jitter added).
+    """
+    K = np.asarray(K, dtype=float)
+    jitter = 0.0
+    scale = max(float(np.mean(np.abs(np.diag(K)))), 1e-300)
+    for k in range(max_tries + 1):
+        Kj = K if jitter == 0.0 else K + jitter * np.eye(K.shape[0])
+        L, info = lapack.dpotrf(Kj, lower=1, clean=1, overwrite_a=0)
+        if info == 0 and np.all(np.isfinite(L)):
+            return L, jitter
+        jitter = scale * 10.0 ** (-10 + k) if jitter == 0.0 else jitter * 10.0
+    raise np.linalg.LinAlgError("kernel matrix not positive definite even with jitter %g" % jitter)
+
+
+def chol_inverse(L: np.ndarray) -> np.ndarray:
+    """K^-1 from the lower Cholesky factor L of K (symmetric, full)."""
+    Kinv, info = lapack.dpotri(L, lower=1)
+    if info != 0:
+        raise np.linalg.LinAlgError("dpotri failed (info=%d)" % info)
+    # L was passed with a zero upper triangle, so Kinv holds only the lower part
+    Kinv = Kinv + Kinv.T
+    Kinv[np.diag_indices_from(Kinv)] *= 0.5
+    return Kinv
+
+
+def _gp_term(K: np.ndarray, T: np.ndarray, c: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """c/2 ln|K| + 1/2 tr(K^-1 T T^T), dL/dK and K^-1 T."""
+    L, _ = safe_cholesky(K)
+    Kinv = chol_inverse(L)
+    B = Kinv @ T
+    val = c * np.sum(np.log(np.diag(L))) + 0.5 * float(np.sum(T * B))
+    G = 0.5 * (c * Kinv - B @ B.T)
+    return val, G, B
+
+
+def _rbf_point_grad(M: np.ndarray, X: np.ndarray, b2: float) -> np.ndarray:
+    """d/dX of sum(G o K_rbf) given M = G o K_rbf (G symmetric)."""
+    return -2.0 * b2 * (np.sum(M, axis=1)[:, None] * X - M @ X)
+
+
+def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray,
+                      with_grad: bool = True) -> tuple[float, np.ndarray] | float:
+    """Eq. 16 (+ first-point prior, optional balancing) and its exact gradient.
+
+    Parameters: ``v`` packed variables (:func:`pack`), ``problem`` the data,
+    ``w`` the per-dimension scales (D,).  Returns ``(L, dL/dv)`` or ``L``.
+    """
+    N, D, d = problem.N, problem.D, problem.latent_dim
+    X, alpha, beta = unpack(np.asarray(v, dtype=float), N, d)
+    w = np.asarray(w, dtype=float)
+    lam = float(problem.dynamics_weight)
+
+    # ---- observation term (Eq. 10, 11)
+    b1, b2, b3 = beta
+    R2 = sq_dist(X)
+    EY = b1 * np.exp(-0.5 * b2 * R2)
+    KY = EY.copy()
+    KY[np.diag_indices(N)] += 1.0 / b3
+    YW = problem.Y * w[None, :]
+    valY, GY, _ = _gp_term(KY, YW, float(D))
+
+    # ---- dynamics term (Eq. 14, 15)
+    a1, a2, a3, a4 = alpha
+    Xin = X[problem.in_idx]
+    Xout = X[problem.out_idx]
+    n_in = Xin.shape[0]
+    R2in = sq_dist(Xin)
+    EX = a1 * np.exp(-0.5 * a2 * R2in)
+    LX = a3 * (Xin @ Xin.T)
+    KX = EX + LX
+    KX[np.diag_indices(n_in)] += 1.0 / a4
+    valX, GX, BX = _gp_term(KX, Xout, float(d))
+
+    X1 = X[problem.first_idx]
+    f = (valY + lam * valX - N * float(np.sum(np.log(w)))
+         + float(np.sum(np.log(alpha)) + np.sum(np.log(beta)))
+         + 0.5 * float(np.sum(X1 * X1)))
+    if not with_grad:
+        return f
+
+    # ---- gradient
+    gX = np.zeros_like(X)
+    MY = GY * EY
+    gX += _rbf_point_grad(MY, X, b2)
+    g_lb = np.array([
+        np.sum(MY) + 1.0,
+        -0.5 * b2 * np.sum(MY * R2) + 1.0,
+        -np.trace(GY) / b3 + 1.0,
+    ])
+
+    GXl = lam * GX
+    MX = GXl * EX
+    g_in = _rbf_point_grad(MX, Xin, a2) + 2.0 * a3 * (GXl @ Xin)
+    gX[problem.in_idx] += g_in
+    gX[problem.out_idx] += lam * BX
+    g_la = np.array([
+        np.sum(MX) + 1.0,
+        -0.5 * a2 * np.sum(MX * R2in) + 1.0,
+        np.sum(GXl * LX) + 1.0,
+        -np.trace(GXl) / a4 + 1.0,
+    ])
+    gX[problem.first_idx] += X1
+    return f, np.concatenate([gX.ravel(), g_la, g_lb])
+
+
+def optimal_w(Y: np.ndarray, X: np.ndarray, beta: np.ndarray,
+              kappa_sq: float = KAPPA_SQ) -> np.ndarray:
+    """Closed-form scales w_d = sqrt(N / (y_d^T K_Y^-1 y_d + 1/kappa^2)).
+
+    This maximises Eq. 16 in W given X and beta, with a N(0, kappa^2) prior on
+    each w_d so that a constant (zero after centring) column gets w_d = kappa
+    sqrt(N) instead of infinity.
+    """
+    Y = np.asarray(Y, dtype=float)
+    N = Y.shape[0]
+    b1, b2, b3 = np.asarray(beta, dtype=float)
+    KY = b1 * np.exp(-0.5 * b2 * sq_dist(X))
+    KY[np.diag_indices(N)] += 1.0 / b3
+    L, _ = safe_cholesky(KY)
+    Z, info = lapack.dtrtrs(L, Y, lower=1)
+    q = np.sum(Z * Z, axis=0)
+    return np.sqrt(N / (q + 1.0 / kappa_sq))
