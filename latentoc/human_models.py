@@ -1,0 +1,96 @@
+"""Human models and training motions of Kang & Park (2015), Sect. 4.1 and 4.2.
+
+* :func:`build_cmu_humanoid` - the CMU subject 01 skeleton (31 links, 62 DOF = 6 base
+  + 56 revolute) as a Pinocchio model with de Leva (1996) masses (Table 5: 63.86 kg,
+  1.75 m).
+* :func:`build_human_arm`, :func:`arm_training_motion` - the 7-DOF arm (Sect. 4.1,
+  Table 1: 8.74 kg, 2.9 s), see :mod:`latentoc.human_arm`.
+* :func:`broad_jump_training_motion`, :func:`broad_jump_sequences` - standing broad
+  jumps cut from CMU take 01_01 (Sect. 4.2, Table 5: 1.3 s).
+
+The data files live in ``robots/cmu`` of the repository (or ``_data/robots/cmu``
+inside an installed wheel), see :func:`robots_dir`.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .mocap.amc import Motion, read_amc
+from .mocap.anthropometry import cmu_inertias
+from .mocap.asf import Skeleton, read_asf
+from .mocap.configurations import motion_to_q
+from .mocap.skeleton_model import build_model
+
+ASF_NAME = "01.asf"
+AMC_NAME = "01_01.amc"
+
+
+def robots_dir() -> Path:
+    """Folder holding ``cmu/01.asf``: repo ``robots/`` first, then the wheel's ``_data/robots``."""
+    here = Path(__file__).resolve()
+    for cand in (here.parents[1] / "robots", here.parent / "_data" / "robots"):
+        if (cand / "cmu" / ASF_NAME).is_file():
+            return cand
+    raise FileNotFoundError("robots/cmu/01.asf not found next to the package or in _data/robots")
+
+
+@lru_cache(maxsize=1)
+def cmu_skeleton() -> Skeleton:
+    """The parsed CMU subject 01 skeleton."""
+    return read_asf(robots_dir() / "cmu" / ASF_NAME)
+
+
+@lru_cache(maxsize=1)
+def cmu_motion() -> Motion:
+    """The parsed take 01_01 (2751 frames at 120 fps)."""
+    return read_amc(robots_dir() / "cmu" / AMC_NAME, cmu_skeleton())
+
+
+def build_cmu_humanoid(mass: float = 63.86, height: float = 1.75) -> pin.Model:
+    """CMU humanoid: free-flyer root + 30 bones, Z up, de Leva masses summing to ``mass``.
+
+    Geometry is the ASF's (not rescaled, so AMC angles reproduce the capture exactly);
+    ``height`` scales the de Leva segment lengths used for the radii of gyration.
+    """
+    skel = cmu_skeleton()
+    root, inert = cmu_inertias(skel, mass, height)
+    return build_model(skel, inertias=inert, root_inertia=root, name="cmu_humanoid")
+
+
+def cmu_configurations(model: pin.Model | None = None, frames=None) -> np.ndarray:
+    """All (or selected) frames of take 01_01 as humanoid configurations (n, 63)."""
+    model = model if model is not None else build_cmu_humanoid()
+    return motion_to_q(model, cmu_skeleton(), cmu_motion(), frames)
+
+
+def build_human_arm() -> pin.Model:
+    """The fixed-base 7-DOF human arm of Sect. 4.1 (see :mod:`latentoc.human_arm`)."""
+    from .human_arm import build_arm
+    return build_arm()
+
+
+def arm_training_motion() -> tuple[np.ndarray, np.ndarray]:
+    """The user-made arm-raising trial (t, Q), 349 samples over 2.9 s."""
+    from .human_arm import training_motion
+    return training_motion()
+
+
+def broad_jump_sequences() -> list[tuple[np.ndarray, np.ndarray]]:
+    """Every standing broad jump of take 01_01 as (t, Q) with t starting at 0."""
+    from .mocap.jumps import detect_jumps, jump_window
+    model = build_cmu_humanoid()
+    Q = cmu_configurations(model)
+    out = []
+    for j in detect_jumps(model, Q):
+        a, b = jump_window(j)
+        out.append((np.arange(b - a) / 120.0, Q[a:b].copy()))
+    return out
+
+
+def broad_jump_training_motion() -> tuple[np.ndarray, np.ndarray]:
+    """The training broad jump (the first jump of the take, ~1.3 s at 120 fps)."""
+    return broad_jump_sequences()[0]
