@@ -32,10 +32,12 @@ def main(argv: list[str] | None = None) -> int:
     """Print learning time and final objective for each benchmark size."""
     p = argparse.ArgumentParser(prog="gpdm_bench", description=__doc__)
     p.add_argument("--quick", action="store_true", help="only N=150")
-    p.add_argument("--unbalanced", action="store_true", help="plain GPDM (lambda = 1)")
+    p.add_argument("--balanced", action="store_true", help="balanced GPDM (lambda = D/d)")
     args = p.parse_args(argv)
     sizes = [(150, 7), (150, 37)] + ([] if args.quick else [(350, 7), (350, 37)])
-    settings = GPDMSettings(latent_dim=3, balanced=not args.unbalanced)
+    settings = GPDMSettings(latent_dim=3)
+    if args.balanced:
+        settings.balanced = True
     print(f"GPDM learning benchmark (d=3, balanced={settings.balanced}, "
           f"outer_iterations={settings.outer_iterations}, max_iterations={settings.max_iterations})")
     print(f"{'N':>5} {'D':>4} {'time [s]':>9} {'objective':>13} {'rec. RMS':>9} {'roughness':>9}")
