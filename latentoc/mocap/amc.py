@@ -84,7 +84,7 @@ def parse_amc(text: str, skeleton: Skeleton, path: str | Path | None = None,
             header.append(s)
             continue
         toks = s.split()
-        if len(toks) == 1 and toks[0].isdigit():
+        if len(toks) == 1 and toks[0].isascii() and toks[0].isdigit():
             close(ln)
             n = int(toks[0])
             if frame_numbers and n != frame_numbers[-1] + 1:

@@ -137,7 +137,7 @@ def parse_asf(text: str, path: str | Path | None = None) -> Skeleton:
                 raise MocapFormatError(p, ln, f"bone ending here lacks '{key}'")
         dof = cur.get("dof", [])
         limits = cur.get("limits", [])
-        if dof and len(limits) != len(dof):
+        if limits and len(limits) != len(dof):
             raise MocapFormatError(p, ln, f"bone {cur['name']!r} has {len(dof)} dof but {len(limits)} limits")
         nm = cur["name"]
         if nm in bones or nm == "root":
