@@ -155,3 +155,23 @@ def test_too_few_frames_for_latent_dim_raises():
     Y = synthetic_motion(4, 10, seed=5)
     with pytest.raises(GPDMInputError, match="too few frames"):
         learn_gpdm(Y, GPDMSettings(latent_dim=3))
+
+
+def test_random_init_uses_seed_and_learns():
+    Y = synthetic_motion(40, 6, seed=6, noise=0.02)
+    s1 = GPDMSettings(latent_dim=2, init="random", seed=1, outer_iterations=2, max_iterations=40)
+    m1 = learn_gpdm(Y, s1)
+    m1b = learn_gpdm(Y, s1)
+    m2 = learn_gpdm(Y, GPDMSettings(latent_dim=2, init="random", seed=2, outer_iterations=1,
+                                    max_iterations=1))
+    np.testing.assert_array_equal(m1.X, m1b.X)  # deterministic for a fixed seed
+    assert not np.allclose(m1.X, m2.X)
+    assert m1.reconstruction_rmse() < 0.2 * Y.std()
+
+
+def test_roughness_reference_values():
+    th = np.linspace(0, 2 * np.pi, 61)
+    circ = np.stack([np.cos(th), np.sin(th)], axis=1)
+    assert roughness(circ) == pytest.approx(2 * np.sin(np.pi / 60), rel=1e-9)
+    noise = np.random.default_rng(0).standard_normal((20000, 3))
+    assert 1.5 < roughness(noise) < 1.9
