@@ -48,7 +48,7 @@ import ctypes
 import json
 import time
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Iterator, Sequence
 
 import numpy as np

@@ -18,16 +18,18 @@ Conventions:
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.linalg import solve_triangular
 
 from .kernels import rbf_linear_kernel
 from .objective import safe_cholesky, sequence_indices
+
+if TYPE_CHECKING:  # pragma: no cover
+    import casadi
 
 __all__ = ["GPDM"]
 
@@ -192,11 +194,11 @@ class GPDM:
             self._cache["casadi"] = c
         return c
 
-    def mean_function(self) -> "casadi.Function":  # noqa: F821
+    def mean_function(self) -> "casadi.Function":
         """casadi.Function x (d) -> q (D), equal to :meth:`mean` (SX, cached)."""
         return self._casadi_exprs()["mean"]
 
-    def variance_function(self) -> "casadi.Function":  # noqa: F821
+    def variance_function(self) -> "casadi.Function":
         """casadi.Function x (d) -> sigma2 (1), equal to :meth:`variance` (SX, cached)."""
         return self._casadi_exprs()["variance"]
 
