@@ -40,3 +40,16 @@ def test_scaling_with_height_and_mass():
     assert np.isclose(b["thigh"].mass, 2 * a["thigh"].mass)
     assert np.isclose(b["thigh"].length, 2 * a["thigh"].length)
     assert np.isclose(de_leva_segments(100, 1.741)["thigh"].length, 0.4222)
+
+
+def test_mass_matrix_positive_definite_on_data():
+    import pinocchio as pin
+
+    from latentoc.human_models import cmu_configurations
+    m = build_cmu_humanoid()
+    d = m.createData()
+    for q in cmu_configurations(m, slice(0, 2751, 500)):
+        M = pin.crba(m, d, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        assert np.linalg.eigvalsh(M).min() > 0
+        assert np.isclose(M[0, 0], 63.86)  # base translational block = total mass

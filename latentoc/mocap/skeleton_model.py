@@ -21,6 +21,11 @@ Conventions
 * Bones without dof are fixed bodies merged into their parent joint (a ``FIXED_JOINT``
   frame plus a ``BODY`` frame).  Every bone has a ``BODY`` frame ``<bone>`` and an
   ``OP_FRAME`` ``<bone>_end`` at its end point.
+
+Sizes for CMU subject 01: 31 links (BODY frames: root + 30 bones).  The paper's
+"62 degrees of freedom" include the 6 of the root: the ASF bones carry 56 revolute
+dofs (lhipjoint/rhipjoint have none), so the model has nq = 56 + 7 = 63, nv = 62.
+Revolute joints of a multi-dof bone before the last are massless.
 """
 from __future__ import annotations
 
