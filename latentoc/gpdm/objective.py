@@ -16,7 +16,8 @@ i.e. Eq. 16 plus the N(0, I) prior on the first latent point of every sequence
 (the ``p(x_1)`` factor of Eq. 14).  ``lam`` is 1 for the plain GPDM and D/d for
 the balanced GPDM of Urtasun et al. (2006).  With several sequences, X_in and
 X_out are built per sequence (:func:`sequence_indices`) and K_X is the kernel
-matrix of the stacked X_in.
+matrix of the stacked X_in.  The N(0, kappa^2) prior on w used by
+:func:`optimal_w` is not part of L (w is fixed during the inner optimisation).
 
 Gradient in matrix form: with G = dL/dK = 1/2 (c K^-1 - K^-1 T T^T K^-1)
 (c = D, T = Y W for K_Y; c = d, T = X_out for K_X) the derivative with respect to
