@@ -110,3 +110,9 @@ def test_fuzz_mutated_lines(i, op, tok, j):
 @given(st.text(max_size=300))
 def test_fuzz_random_text(text):
     _check(text)
+
+
+def test_data_readme_keeps_cmu_attribution():
+    text = (ASF.parent / "README.md").read_text()
+    assert ('"The data used in this project was obtained from mocap.cs.cmu.edu. The database was '
+            'created with funding from NSF EIA-0196217."') in text

@@ -29,7 +29,8 @@ foot           l/rfoot, l/rtoes        0.75, 0.25
 
 The COM of a piece lies on its bone at the de Leva fraction measured from the
 bone's start (spine and head bones point upwards, so the cranial-origin de Leva
-fractions are flipped); the root's COM is at the root.  A piece's inertia about its
+fractions are flipped); minor pieces (share < 0.5) have it at mid-bone; the root's
+COM is at the root.  A piece's inertia about its
 COM is ``share * m_seg * diag((r_sag L)^2, (r_trans L)^2, (r_long L)^2)`` with the
 long axis along the bone (vertical for the root), so it is positive definite.
 """
@@ -142,8 +143,8 @@ def cmu_inertias(skeleton: Skeleton, mass: float = 63.86, height: float = 1.75,
         C = euler_matrix(b.axis, b.axis_order)
         vec = C.T @ (b.direction * b.length * u)  # bone vector in its body frame
         frac = 1.0 - s.com_fraction if sname in _CRANIAL else s.com_fraction
-        if share < 1.0 and sname not in ("head",) and bn not in ("head",):
-            frac = 0.5 if sname not in _CRANIAL else frac
+        if share < 0.5:  # minor piece of a split segment: COM at mid-bone
+            frac = 0.5
         pieces[bn] = (m, s.radii, frac * vec, vec)
     scale = 1.0
     if total is not None:

@@ -76,7 +76,7 @@ class Skeleton:
         return 6 + sum(len(b.dof) for b in self.bones.values())
 
     def topological_order(self) -> list[str]:
-        """Bone names, parents before children, ASF listing order otherwise."""
+        """Bone names in depth-first hierarchy order (parents before children)."""
         out: list[str] = []
         stack = list(reversed(self.hierarchy.get("root", [])))
         while stack:
