@@ -1,0 +1,93 @@
+"""Clamped uniform B-splines on [0, T] (paper Eq. 5, 20, 23-25).
+
+``x(t, P) = sum_i p_i B_i(t)`` with ``m`` control points ``P`` (m x d). The knot vector is
+clamped (the curve starts at ``p_1`` and ends at ``p_m``) and uniform inside. The basis
+matrices are numeric, so in a transcription ``x(t_k)``, ``xdot(t_k)``, ``xddot(t_k)`` are
+linear maps of the control points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import BSpline as _ScipyBSpline
+
+__all__ = ["BSpline", "SplineInputError"]
+
+
+class SplineInputError(ValueError):
+    """Spline settings or data that cannot be used."""
+
+
+@dataclass(frozen=True)
+class BSpline:
+    """A clamped uniform B-spline basis with ``n_control`` control points on ``[0, duration]``."""
+
+    n_control: int
+    duration: float
+    degree: int = 3
+
+    def __post_init__(self) -> None:
+        if self.degree < 1:
+            raise SplineInputError(f"spline degree must be at least 1, got {self.degree}")
+        if self.n_control < self.degree + 1:
+            raise SplineInputError(
+                f"a degree-{self.degree} B-spline needs at least {self.degree + 1} control points, got {self.n_control}"
+            )
+        if not np.isfinite(self.duration) or self.duration <= 0:
+            raise SplineInputError(f"spline duration must be a positive number, got {self.duration}")
+
+    @property
+    def knots(self) -> np.ndarray:
+        """Clamped knot vector: ``degree + 1`` repeated knots at each end, uniform inside."""
+        inner = np.linspace(0.0, self.duration, self.n_control - self.degree + 1)
+        return np.concatenate([np.zeros(self.degree), inner, np.full(self.degree, self.duration)])
+
+    @property
+    def breakpoints(self) -> np.ndarray:
+        """The distinct knots: the curve is a polynomial between consecutive breakpoints."""
+        return np.linspace(0.0, self.duration, self.n_control - self.degree + 1)
+
+    def basis(self, t: np.ndarray, derivative: int = 0) -> np.ndarray:
+        """Matrix ``B`` (len(t) x m) with ``B[k, i] = d^r B_i / dt^r (t_k)`` (Eq. 23-25)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if np.any(t < -1e-12) or np.any(t > self.duration + 1e-12):
+            raise SplineInputError(f"spline times must lie in [0, {self.duration}]")
+        t = np.clip(t, 0.0, self.duration)
+        eye = np.eye(self.n_control)
+        spline = _ScipyBSpline(self.knots, eye, self.degree, extrapolate=False)
+        if derivative:
+            spline = spline.derivative(derivative)
+        B = spline(t)
+        return np.nan_to_num(B, nan=0.0)
+
+    def evaluate(self, P: np.ndarray, t: np.ndarray, derivative: int = 0) -> np.ndarray:
+        """``x(t)`` (or its derivative) for control points ``P`` (m x d): array (len(t) x d)."""
+        P = np.asarray(P, dtype=float)
+        if P.shape[0] != self.n_control:
+            raise SplineInputError(f"control points P has {P.shape[0]} rows, the spline has {self.n_control}")
+        return self.basis(t, derivative) @ P
+
+    def fit(self, t: np.ndarray, X: np.ndarray, fix_ends: bool = True) -> np.ndarray:
+        """Least-squares control points of samples ``X`` (n x d) at times ``t``.
+
+        With ``fix_ends`` the first and last control points equal the first and last samples,
+        so the fitted curve passes exactly through the end poses.
+        """
+        t = np.asarray(t, dtype=float)
+        X = np.asarray(X, dtype=float)
+        if X.ndim == 1:
+            X = X[:, None]
+        if X.shape[0] != t.size:
+            raise SplineInputError(f"fit got {t.size} times but {X.shape[0]} samples")
+        if not np.all(np.isfinite(X)):
+            raise SplineInputError("fit samples contain NaN or inf")
+        B = self.basis(t)
+        if not fix_ends:
+            return np.linalg.lstsq(B, X, rcond=None)[0]
+        P = np.zeros((self.n_control, X.shape[1]))
+        P[0], P[-1] = X[0], X[-1]
+        rhs = X - B[:, [0]] * P[0] - B[:, [-1]] * P[-1]
+        P[1:-1] = np.linalg.lstsq(B[:, 1:-1], rhs, rcond=None)[0]
+        return P

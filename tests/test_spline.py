@@ -1,0 +1,44 @@
+"""B-spline basis against scipy's de Boor evaluation, finite differences and exact fits."""
+
+import numpy as np
+import pytest
+
+from latentoc.spline import BSpline, SplineInputError
+
+
+def test_partition_of_unity_and_clamped_ends():
+    s = BSpline(9, 2.9)
+    t = np.linspace(0, 2.9, 301)
+    B = s.basis(t)
+    assert np.allclose(B.sum(axis=1), 1.0, atol=1e-12)
+    assert np.allclose(B[0], np.eye(9)[0]) and np.allclose(B[-1], np.eye(9)[-1])
+    assert np.allclose(s.basis(t, 1).sum(axis=1), 0.0, atol=1e-10)
+
+
+def test_derivatives_match_finite_differences():
+    s = BSpline(7, 1.3)
+    P = np.random.default_rng(0).normal(size=(7, 3))
+    t = np.linspace(0.05, 1.25, 50)
+    h = 1e-6
+    for r in (1, 2):
+        fd = (s.evaluate(P, t + h, r - 1) - s.evaluate(P, t - h, r - 1)) / (2 * h)
+        assert np.allclose(s.evaluate(P, t, r), fd, rtol=1e-5, atol=1e-4)
+
+
+def test_fit_reproduces_a_cubic_exactly():
+    # a cubic polynomial lies in the spline space: the least-squares fit is exact
+    s = BSpline(6, 2.0)
+    t = np.linspace(0, 2, 80)
+    X = np.stack([t**3 - t, 0.5 * t**2 + 1], axis=1)
+    P = s.fit(t, X)
+    assert np.allclose(s.evaluate(P, t), X, atol=1e-10)
+    assert np.allclose(P[0], X[0]) and np.allclose(P[-1], X[-1])
+
+
+def test_bad_input():
+    with pytest.raises(SplineInputError, match="at least 4 control points"):
+        BSpline(3, 1.0)
+    with pytest.raises(SplineInputError, match="duration"):
+        BSpline(5, -1.0)
+    with pytest.raises(SplineInputError, match="NaN"):
+        BSpline(5, 1.0).fit(np.linspace(0, 1, 10), np.full((10, 2), np.nan))
