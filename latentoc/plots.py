@@ -88,9 +88,16 @@ def _normal_frames(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return n1, n2
 
 
-def tube_mesh(gpdm: Any, delta: float, centre: np.ndarray | None = None, n_along: int = 80,
-              n_around: int = 24, r_max: float | None = None, n_scan: int = 24,
-              iterations: int = 30) -> tuple[np.ndarray, np.ndarray]:
+def _variance(gpdm: Any, pts: np.ndarray, chunk: int = 2048) -> np.ndarray:
+    """gpdm.variance on many points, in chunks to bound memory."""
+    pts = np.asarray(pts, dtype=float).reshape(-1, gpdm.latent_dim)
+    return np.concatenate([np.atleast_1d(gpdm.variance(pts[i:i + chunk]))
+                           for i in range(0, len(pts), chunk)])
+
+
+def tube_mesh(gpdm: Any, delta: float, centre: np.ndarray | None = None, n_along: int = 60,
+              n_around: int = 18, r_max: float | None = None, n_scan: int = 16,
+              iterations: int = 24) -> tuple[np.ndarray, np.ndarray]:
     """Surface sigma^2(x) = delta of the variance tube (Eq. 29) around a 3-D curve.
 
     Rays leave ``n_along`` points of ``centre`` (default: the first training
@@ -113,7 +120,7 @@ def tube_mesh(gpdm: Any, delta: float, centre: np.ndarray | None = None, n_along
     na, nr = U.shape[:2]
     radii = np.linspace(0.0, r_max, int(n_scan) + 1)
     pts = C[:, None, None, :] + radii[None, None, :, None] * U[:, :, None, :]
-    var = np.asarray(gpdm.variance(pts.reshape(-1, 3))).reshape(na, nr, -1) - delta
+    var = _variance(gpdm, pts).reshape(na, nr, -1) - delta
     outside = var > 0.0
     first = np.argmax(outside, axis=2)  # index of the first radius outside
     crosses = outside.any(axis=2) & (first > 0)
@@ -121,7 +128,7 @@ def tube_mesh(gpdm: Any, delta: float, centre: np.ndarray | None = None, n_along
     hi = np.where(crosses, radii[first], 0.0)
     for _ in range(int(iterations)):
         mid = 0.5 * (lo + hi)
-        v = np.asarray(gpdm.variance((C[:, None, :] + mid[..., None] * U).reshape(-1, 3)))
+        v = _variance(gpdm, C[:, None, :] + mid[..., None] * U)
         out = v.reshape(na, nr) > delta
         hi = np.where(out, mid, hi)
         lo = np.where(out, lo, mid)
@@ -206,10 +213,10 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
         for T in gpdm.latent_trajectories():
             P, ok = tube_mesh(gpdm, delta, centre=T)
             P = np.concatenate([P, P[:, :1]], axis=1)  # close the tube around
-            ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], color="gold", alpha=0.25,
+            ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], color="gold", alpha=0.35,
                             linewidth=0, shade=True)
         X = gpdm.X
-        ax.scatter(X[:, 0], X[:, 1], X[:, 2], s=4, c="k", label="training latent points")
+        ax.scatter(X[:, 0], X[:, 1], X[:, 2], s=1.5, c="k", label="training latent points")
         for i, (name, c) in enumerate(curves.items()):
             ax.plot(c[:, 0], c[:, 1], c[:, 2], styles[i % 4], lw=2, label=name)
         for name, c in ctrl.items():
@@ -225,7 +232,7 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
         pad = 0.3 * (hi - lo) + 1e-9
         g1, g2 = np.meshgrid(np.linspace(lo[0] - pad[0], hi[0] + pad[0], 200),
                              np.linspace(lo[1] - pad[1], hi[1] + pad[1], 200))
-        V = np.asarray(gpdm.variance(np.column_stack([g1.ravel(), g2.ravel()]))).reshape(g1.shape)
+        V = _variance(gpdm, np.column_stack([g1.ravel(), g2.ravel()])).reshape(g1.shape)
         ax.contourf(g1, g2, V, levels=[V.min() - 1.0, delta], colors=["gold"], alpha=0.35)
         ax.contour(g1, g2, V, levels=[delta], colors=["goldenrod"], linewidths=1)
         ax.plot(gpdm.X[:, 0], gpdm.X[:, 1], "k.", ms=3, label="training latent points")
