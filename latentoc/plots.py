@@ -456,6 +456,86 @@ def plot_stick_frames(model: pin.Model, Q: np.ndarray | Mapping[str, np.ndarray]
 
 
 # ------------------------------------------------------------------ solution
-def plot_solution(out_dir: str | Path) -> list[Path]:
-    """Write the figures for a solved problem into ``out_dir/plots`` and return their paths."""
-    raise NotImplementedError
+def _pick(store: Mapping[str, Any], *keys: str) -> Any:
+    """The first of ``keys`` present in ``store`` (None if none is)."""
+    for k in keys:
+        if k in store:
+            return store[k]
+    return None
+
+
+def _actuated(model: pin.Model, max_joints: int, Q: np.ndarray) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Names, q indices and v indices of the 1-DOF joints; if more than ``max_joints``, the
+    ones moving most in Q."""
+    js = [j for j in range(1, model.njoints) if model.joints[j].nq == 1]
+    if len(js) > max_joints:
+        ranges = np.ptp(Q[:, [model.joints[j].idx_q for j in js]], axis=0)
+        js = sorted(js[k] for k in np.argsort(-ranges)[:max_joints])
+    return ([model.names[j] for j in js], np.array([model.joints[j].idx_q for j in js]),
+            np.array([model.joints[j].idx_v for j in js]))
+
+
+def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None = None) -> list[Path]:
+    """Write the figures of a solved problem (``out_dir/result.json`` and
+    ``trajectory.npz``) into ``out_dir/plots/`` and return their paths.
+
+    Always: joint angles, torques (with limits when recorded) and stick frames;
+    with a saved GPDM (``gpdm.npz`` next to the result): the latent tube with the
+    initial and optimised paths and the control points; for contact problems:
+    contact forces and ZMP/COM in the support polygon.
+    """
+    out_dir = Path(out_dir)
+    result = json.loads((out_dir / "result.json").read_text())
+    traj = dict(np.load(out_dir / "trajectory.npz", allow_pickle=False))
+    plot_dir = out_dir / "plots"
+    model = pin.Model()
+    model.loadFromString(str(traj["model"]))
+    t, q = traj["t"], traj["q"]
+    q0 = _pick(traj, "q_initial", "q0", "initial_q")
+    tau, tau0 = traj.get("tau"), _pick(traj, "tau_initial", "tau0", "initial_tau")
+    names, iq, iv = _actuated(model, max_joints, q)
+    floating = model.njoints > 1 and model.joints[1].nq == 7
+    plane = plane or ("xz" if floating else "yz")
+    title = result.get("problem", out_dir.name)
+    written: list[Path] = []
+
+    qs = {"optimised": q[:, iq]}
+    if q0 is not None:
+        qs = {"initial": q0[:, iq], **qs}
+    written.append(plot_joint_curves(t, qs, names, plot_dir / "joint_angles.png"))
+    if tau is not None:
+        taus = {"optimised": tau[:, iv]}
+        if tau0 is not None:
+            taus = {"initial": tau0[:, iv], **taus}
+        lo, hi = _pick(traj, "tau_min"), _pick(traj, "tau_max")
+        limits = (np.broadcast_to(lo, (model.nv,))[iv], np.broadcast_to(hi, (model.nv,))[iv]) \
+            if lo is not None and hi is not None else None
+        written.append(plot_torques(t, taus, names, plot_dir / "torques.png", limits=limits))
+    motions = {"optimised": q} if q0 is None else {"initial": q0, "optimised": q}
+    written.append(plot_stick_frames(model, motions, plot_dir / "stick_frames.png", plane=plane))
+
+    forces = _pick(traj, "contact_forces", "forces")
+    if forces is not None:
+        cnames = [str(n) for n in _pick(traj, "contact_frames", "contact_names")]
+        tf = _pick(traj, "t_contact", "t_forces")
+        written.append(plot_contact_forces(t if tf is None else tf, forces, cnames,
+                                           plot_dir / "contact_forces.png"))
+    zmp, com, poly = _pick(traj, "zmp"), _pick(traj, "com"), _pick(traj, "support_polygon")
+    if zmp is not None and com is not None and poly is not None:
+        written.append(plot_zmp_com(zmp, com, poly, plot_dir / "zmp_com.png"))
+
+    gpdm_file = out_dir / "gpdm.npz"
+    x = _pick(traj, "x", "latent")
+    if gpdm_file.exists() and x is not None:
+        from .gpdm import GPDM
+        gpdm = GPDM.load(gpdm_file)
+        paths = {"optimised": x}
+        x0 = _pick(traj, "x_initial", "x0", "initial_x")
+        if x0 is not None:
+            paths = {"initial": x0, **paths}
+        delta = float(_pick(result, "tube", "delta"))
+        ctrl = _pick(traj, "P", "control_points")
+        written.append(plot_latent_tube(gpdm, delta, plot_dir / "latent_tube.png", paths=paths,
+                                        control_points=None if ctrl is None else {"control points": ctrl},
+                                        title=f"{title}: delta = {delta:.3g}"))
+    return written

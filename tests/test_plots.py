@@ -135,3 +135,50 @@ def test_plot_stick_frames(arm, tmp_path, layout):
     assert list(plots.frame_indices(len(Q), 8)) [0] == 0
     assert plots.frame_indices(len(Q), 8)[-1] == len(Q) - 1
     assert len(plots.frame_indices(len(Q), 8)) == 8
+
+
+def write_solution(out, model, t, q, gpdm=None, **extra):
+    out.mkdir(parents=True, exist_ok=True)
+    tau = np.sin(np.outer(t, np.arange(1, model.nv + 1)))
+    arrays = {"t": t, "q": q, "tau": tau, "q_initial": q[::-1].copy(), "tau_initial": 0.5 * tau,
+              "model": np.str_(model.saveToString()), **extra}
+    np.savez(out / "trajectory.npz", **arrays)
+    (out / "result.json").write_text(json.dumps({"problem": "test", "tube": 2.0 * gpdm.tube_size()
+                                                 if gpdm is not None else 1.0}))
+    if gpdm is not None:
+        gpdm.save(out / "gpdm.npz")
+
+
+def test_plot_solution_arm(arm, gpdm3, tmp_path):
+    model, t, Q = arm
+    X = gpdm3.latent_trajectories()[0]
+    write_solution(tmp_path, model, t[::6], Q[::6], gpdm3, x=X, x_initial=X[::-1].copy(),
+                   P=X[::10], tau_min=-np.ones(7), tau_max=np.ones(7))
+    paths = plots.plot_solution(tmp_path)
+    names = {p.name for p in paths}
+    assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "latent_tube.png"}
+    figure = {"joint_angles": "joint_curves", "torques": "torques", "stick_frames": "stick_frames",
+              "latent_tube": "latent_tube"}
+    for p in paths:
+        check_png(p, figure[p.stem], rows=2)  # rows: initial and optimised stick frames
+
+
+def test_plot_solution_contacts(tmp_path):
+    model = pin.Model()
+    j = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
+    k = model.addJoint(j, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0, 0, -0.5])), "knee")
+    model.appendBodyToJoint(k, pin.Inertia.Random(), pin.SE3.Identity())
+    model.addFrame(pin.Frame("foot_end", k, pin.SE3(np.eye(3), np.array([0, 0, -0.5])),
+                             pin.FrameType.OP_FRAME))
+    t = np.linspace(0, 1, 40)
+    q = np.tile(pin.neutral(model), (40, 1))
+    q[:, 0], q[:, 2], q[:, 7] = t, 1.0, 0.3 * np.sin(3 * t)
+    F = np.zeros((40, 1, 3))
+    F[:, 0, 2] = 600.0
+    poly = np.array([[0, -0.1], [0.2, -0.1], [0.2, 0.1], [0, 0.1]])
+    write_solution(tmp_path, model, t, q, contact_forces=F, contact_frames=np.array(["foot_end"]),
+                   zmp=np.column_stack([0.1 + 0 * t, 0 * t]), com=np.column_stack([0.1 + 0 * t, 0 * t, 0.8 + 0 * t]),
+                   support_polygon=poly)
+    names = {p.name for p in plots.plot_solution(tmp_path)}
+    assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png",
+                     "zmp_com.png"}
