@@ -1,0 +1,93 @@
+"""Joint motion of a latent trajectory through the GPDM mean (Kang & Park 2015, Eq. 21, 26-28).
+
+For a latent point x with velocity xd and acceleration xdd (Eq. 23-25, linear in the
+control points), the joint motion is::
+
+    q   = mu_Q(x)                                   (Eq. 21, 26)
+    v   = J_mu(x) xd                                (Eq. 27)
+    a   = J_mu(x) xdd + d/dx (J_mu(x) xd) xd        (Eq. 28)
+
+computed by CasADi's forward mode (``jtimes``) on the GPDM's SX mean function, so no
+Jacobian of mu_Q is ever formed explicitly. Torques follow from ``SymbolicModel.rnea``
+(Eq. 1-2), and the minimum-torque integrand is L = |tau|^2.
+
+:func:`latent_node_function` is the one per-node SX Function the transcription maps over
+its quadrature nodes. :func:`gp_grid_function` evaluates sigma^2 (Eq. 19) and mu_Q at K
+latent points at once as dense MX matrix products: the variance costs O(N^2) per point,
+which is ~10x cheaper as one dense product than as N^2 scalar SX operations.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from .dynamics import SymbolicModel
+from .gpdm import GPDM
+
+__all__ = ["latent_kinematics", "latent_node_function", "gp_grid_function", "joint_node_function"]
+
+
+def latent_kinematics(gpdm: GPDM) -> ca.Function:
+    """SX Function (x, xd, xdd) [d] -> (q, v, a) [D] of Eq. 26-28."""
+    d = gpdm.latent_dim
+    mean = gpdm.mean_function()
+    x, xd, xdd = ca.SX.sym("x", d), ca.SX.sym("xd", d), ca.SX.sym("xdd", d)
+    q = mean(x)
+    v = ca.jtimes(q, x, xd)
+    a = ca.jtimes(q, x, xdd) + ca.jtimes(v, x, xd)
+    return ca.Function("latent_kinematics", [x, xd, xdd], [q, v, a],
+                       ["x", "xd", "xdd"], ["q", "v", "a"])
+
+
+def _torque_cost(tau: ca.SX) -> ca.SX:
+    return ca.sumsqr(tau)
+
+
+def latent_node_function(gpdm: GPDM, model: SymbolicModel) -> ca.Function:
+    """SX Function (x, xd, xdd) -> (L, tau, q, v, a) with L = |tau|^2 (minimum torque)."""
+    if model.nq != gpdm.output_dim or model.nv != model.nq:
+        raise ValueError(f"the GPDM outputs {gpdm.output_dim} joint angles but the model has "
+                         f"nq = {model.nq}, nv = {model.nv}; the latent transcription needs nq = nv = D")
+    kin = latent_kinematics(gpdm)
+    d = gpdm.latent_dim
+    x, xd, xdd = ca.SX.sym("x", d), ca.SX.sym("xd", d), ca.SX.sym("xdd", d)
+    q, v, a = kin(x, xd, xdd)
+    tau = model.rnea(q, v, a)
+    return ca.Function("latent_node", [x, xd, xdd], [_torque_cost(tau), tau, q, v, a],
+                       ["x", "xd", "xdd"], ["L", "tau", "q", "v", "a"])
+
+
+def joint_node_function(model: SymbolicModel) -> ca.Function:
+    """SX Function (q, v, a) -> (L, tau) for the full configuration-space baseline."""
+    n = model.nv
+    q, v, a = ca.SX.sym("q", model.nq), ca.SX.sym("v", n), ca.SX.sym("a", n)
+    tau = model.rnea(q, v, a)
+    return ca.Function("joint_node", [q, v, a], [_torque_cost(tau), tau], ["q", "v", "a"], ["L", "tau"])
+
+
+def gp_grid_function(gpdm: GPDM, n_points: int) -> ca.Function:
+    """MX Function X (d x K) -> (sigma2 (1 x K), Q (D x K)): Eq. 19 and Eq. 18 at K points."""
+    d, N = gpdm.latent_dim, gpdm.X.shape[0]
+    K = int(n_points)
+    obs = gpdm._obs()  # K_Y^-1 factors, cached by the GPDM
+    b1, b2, b3 = (float(b) for b in gpdm.beta)
+    X = ca.MX.sym("X", d, K)
+    r2 = 0
+    for j in range(d):
+        diff = ca.repmat(ca.DM(gpdm.X[:, j]), 1, K) - ca.repmat(X[j, :], N, 1)
+        r2 = r2 + diff * diff
+    kmat = b1 * ca.exp(-0.5 * b2 * r2)  # N x K
+    V = ca.mtimes(ca.DM(obs["Linv"]), kmat)
+    sigma2 = (b1 + 1.0 / b3) - ca.sum1(V * V)
+    Q = ca.repmat(ca.DM(gpdm.Y_mean), 1, K) + ca.mtimes(ca.DM(obs["A"].T / gpdm.W[:, None]), kmat)
+    return ca.Function("gp_grid", [X], [sigma2, Q], ["X"], ["sigma2", "Q"])
+
+
+def numeric_latent_motion(gpdm: GPDM, model: SymbolicModel, x: np.ndarray, xd: np.ndarray,
+                          xdd: np.ndarray) -> dict[str, np.ndarray]:
+    """Evaluate q, v, a, tau, L along K latent samples (arrays K x d); returns K x n arrays."""
+    f = latent_node_function(gpdm, model).map(x.shape[0])
+    L, tau, q, v, a = f(x.T, xd.T, xdd.T)
+    return {"L": np.asarray(L).ravel(), "tau": np.asarray(tau).T, "q": np.asarray(q).T,
+            "v": np.asarray(v).T, "a": np.asarray(a).T}
