@@ -1,0 +1,5 @@
+"""``python -m latentoc``: see :mod:`latentoc.cli`."""
+
+from .cli import main
+
+raise SystemExit(main())
