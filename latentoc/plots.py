@@ -475,13 +475,39 @@ def _actuated(model: pin.Model, max_joints: int, Q: np.ndarray) -> tuple[list[st
             np.array([model.joints[j].idx_v for j in js]))
 
 
+def _inverse_dynamics(model: pin.Model, t: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Torques of a sampled motion with finite-difference v and a (vector-space q only)."""
+    V = np.gradient(Q, t, axis=0)
+    A = np.gradient(V, t, axis=0)
+    data = model.createData()
+    return np.array([pin.rnea(model, data, q, v, a) for q, v, a in zip(Q, V, A)])
+
+
+def _solution_gpdm(out_dir: Path, result: Mapping[str, Any]) -> Any:
+    """The solution's GPDM: ``gpdm.npz`` beside the result, else re-learned from its
+    problem (deterministic), else None."""
+    from .gpdm import GPDM
+    if (out_dir / "gpdm.npz").exists():
+        return GPDM.load(out_dir / "gpdm.npz")
+    source = result.get("problem_source") or result.get("problem")
+    if not source or "latent_dim" not in result:
+        return None
+    try:
+        from .problem import load_problem
+        from .solve import problem_gpdm
+        return problem_gpdm(load_problem(source), int(result["latent_dim"]))[0]
+    except Exception:  # problem file gone or unreadable: skip the latent figure
+        return None
+
+
 def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None = None) -> list[Path]:
     """Write the figures of a solved problem (``out_dir/result.json`` and
     ``trajectory.npz``) into ``out_dir/plots/`` and return their paths.
 
     Always: joint angles, torques (with limits when recorded) and stick frames;
-    with a saved GPDM (``gpdm.npz`` next to the result): the latent tube with the
-    initial and optimised paths and the control points; for contact problems:
+    for a latent solution: the tube with the initial and optimised paths and
+    control points (GPDM from ``gpdm.npz`` beside the result, else re-learned
+    from the problem file, which is deterministic); for contact problems:
     contact forces and ZMP/COM in the support polygon.
     """
     out_dir = Path(out_dir)
@@ -493,6 +519,8 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
     t, q = traj["t"], traj["q"]
     q0 = _pick(traj, "q_initial", "q0", "initial_q")
     tau, tau0 = traj.get("tau"), _pick(traj, "tau_initial", "tau0", "initial_tau")
+    if tau0 is None and q0 is not None and model.nq == model.nv and len(t) > 2:
+        tau0 = _inverse_dynamics(model, t, q0)
     names, iq, iv = _actuated(model, max_joints, q)
     floating = model.njoints > 1 and model.joints[1].nq == 7
     plane = plane or ("xz" if floating else "yz")
@@ -524,18 +552,24 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
     if zmp is not None and com is not None and poly is not None:
         written.append(plot_zmp_com(zmp, com, poly, plot_dir / "zmp_com.png"))
 
-    gpdm_file = out_dir / "gpdm.npz"
     x = _pick(traj, "x", "latent")
-    if gpdm_file.exists() and x is not None:
-        from .gpdm import GPDM
-        gpdm = GPDM.load(gpdm_file)
+    gpdm = _solution_gpdm(out_dir, result) if x is not None else None
+    if gpdm is not None and gpdm.latent_dim in (2, 3):
         paths = {"optimised": x}
-        x0 = _pick(traj, "x_initial", "x0", "initial_x")
+        ctrl = {}
+        P0 = _pick(traj, "P_initial")
+        x0 = _pick(traj, "x_initial")
+        if x0 is None and P0 is not None:
+            from .spline import BSpline
+            spline = BSpline(len(P0), float(t[-1] - t[0]), int(result.get("spline_degree", 3)))
+            x0 = spline.evaluate(P0, t - t[0])
         if x0 is not None:
             paths = {"initial": x0, **paths}
+        if P0 is not None:
+            ctrl["initial control points"] = P0
+        if _pick(traj, "P") is not None:
+            ctrl["optimised control points"] = traj["P"]
         delta = float(_pick(result, "tube", "delta"))
-        ctrl = _pick(traj, "P", "control_points")
         written.append(plot_latent_tube(gpdm, delta, plot_dir / "latent_tube.png", paths=paths,
-                                        control_points=None if ctrl is None else {"control points": ctrl},
-                                        title=f"{title}: delta = {delta:.3g}"))
+                                        control_points=ctrl, title=f"{title}: delta = {delta:.3g}"))
     return written
