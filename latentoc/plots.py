@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 __all__ = [
     "DPI", "FIGSIZES", "pixel_size", "tube_mesh", "joint_positions", "skeleton_segments",
@@ -30,7 +31,7 @@ FIGSIZES: dict[str, tuple[float, float]] = {
     "torques": (12.0, 8.0),
     "contact_forces": (10.0, 6.0),
     "zmp_com": (8.0, 6.0),
-    "gain_vs_tube": (8.0, 5.0),
+    "gain_vs_tube": (10.0, 4.5),
     "stick_frames": (14.0, 3.5),  # per row of frames
 }
 PLANES = {"xz": (0, 2), "yz": (1, 2), "xy": (0, 1)}
@@ -351,29 +352,56 @@ GAIN_KEYS = ("performance_gain_pct", "gain_pct", "performance_gain", "gain")
 def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
                       reference: Sequence[tuple[float, float]] | None = None,
                       title: str | None = None) -> Path:
-    """Performance gain [%] against tube size delta (Tables 2, 4, 6), log-x.
+    """Performance gain [%] against tube size delta, log-x (Tables 2, 4, 6).
 
-    ``sweep_rows`` are dicts with a tube key (``tube``/``delta``) and a gain key
-    (``performance_gain_pct``); ``reference`` (delta, gain) pairs, e.g. the
-    paper's, are drawn for comparison.
+    ``sweep_rows`` are :func:`latentoc.sweep.sweep` rows (or any dicts with a
+    tube key ``tube``/``delta`` and ``performance_gain_pct``); rows of the
+    full-space baseline (``joint_range_deg``, no tube) go to a second panel,
+    gain against joint range (Table 2, right).  Unsuccessful solves are drawn
+    as open markers.  ``reference`` (delta, gain) pairs, e.g. the paper's, are
+    drawn for comparison.
     """
-    rows = sorted(sweep_rows, key=lambda r: _row_value(r, TUBE_KEYS))
-    x = np.array([_row_value(r, TUBE_KEYS) for r in rows])
-    y = np.array([_row_value(r, GAIN_KEYS) for r in rows])
+    def has(r: Mapping[str, Any], keys: Sequence[str]) -> bool:
+        return any(r.get(k) is not None for k in keys)
+
+    lat = sorted((r for r in sweep_rows if has(r, TUBE_KEYS)), key=lambda r: _row_value(r, TUBE_KEYS))
+    base = sorted((r for r in sweep_rows if not has(r, TUBE_KEYS) and r.get("joint_range_deg") is not None),
+                  key=lambda r: float(r["joint_range_deg"]))
+    if not lat and not base:
+        raise ValueError("sweep_rows has no row with a tube size or a joint range")
     fig = _figure("gain_vs_tube")
-    ax = fig.add_subplot()
-    ax.plot(x, y, "o-", label="latentoc")
-    if reference is not None:
-        ref = np.asarray(reference, dtype=float)
-        ax.plot(ref[:, 0], ref[:, 1], "s--", label="Kang & Park 2015")
-    if np.all(x > 0):
-        ax.set_xscale("log")
-    ax.set_xlabel(r"tube size $\delta$")
-    ax.set_ylabel("performance gain [%]")
-    ax.grid(True, alpha=0.3)
-    ax.legend()
+    axes = fig.subplots(1, 2 if base and lat else 1, squeeze=False)[0]
+
+    def draw(ax, rows, x, xlabel, label):
+        y = np.array([_row_value(r, GAIN_KEYS) for r in rows])
+        ok = np.array([bool(r.get("success", True)) for r in rows])
+        ax.plot(x, y, "-", color="C0", lw=1)
+        ax.plot(x[ok], y[ok], "o", color="C0", label=label)
+        if not ok.all():
+            ax.plot(x[~ok], y[~ok], "o", mfc="none", color="C0", label="not converged")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("performance gain [%]")
+        ax.grid(True, alpha=0.3)
+
+    if lat:
+        ax = axes[0]
+        x = np.array([_row_value(r, TUBE_KEYS) for r in lat])
+        draw(ax, lat, x, r"tube size $\delta$", "latent (GPDM)")
+        if reference is not None:
+            ref = np.asarray(reference, dtype=float)
+            ax.plot(ref[:, 0], ref[:, 1], "s--", color="C1", label="Kang & Park 2015")
+        if np.all(x > 0):
+            ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.legend(fontsize=8)
+    if base:
+        ax = axes[-1]
+        draw(ax, base, np.array([float(r["joint_range_deg"]) for r in base]),
+             "joint range [$\\pm$deg]", "full configuration space")
+        ax.legend(fontsize=8)
     if title:
-        ax.set_title(title)
+        fig.suptitle(title)
+    fig.tight_layout()
     return _save(fig, path)
 
 

@@ -94,6 +94,11 @@ def test_contact_forces_zmp_gain(tmp_path):
     rows = [{"tube": d, "performance_gain_pct": g} for d, g in [(1e-5, 19.0), (1e-4, 31.0), (1e-6, 3.0)]]
     check_png(plots.plot_gain_vs_tube(rows, tmp_path / "gain.png",
                                       reference=[(1e-6, 2.87), (1e-4, 31.3)]), "gain_vs_tube")
+    rows += [{"method": "joint-range", "tube": None, "joint_range_deg": k, "performance_gain_pct": g,
+              "success": k < 40} for k, g in [(5, 5.3), (20, 23.5), (45, 38.5)]]
+    check_png(plots.plot_gain_vs_tube(rows, tmp_path / "gain2.png"), "gain_vs_tube")
+    with pytest.raises(ValueError, match="no row"):
+        plots.plot_gain_vs_tube([{"cost": 1.0}], tmp_path / "gain3.png")
 
 
 def test_stick_segments_are_forward_kinematics(arm):
