@@ -1,0 +1,120 @@
+"""Foot contact: points, ball-pinned anchoring of the base, contact forces (Sect. 4.2).
+
+Contact points of the left foot (the right one is its mirror image):
+
+* ``ball`` - the end of the foot bone (frame ``lfoot_end``);
+* ``toe`` - the end of the toes bone (frame ``ltoes_end``);
+* ``heel`` - a point fixed in the foot body (frame ``lfoot``, at the ankle): the ankle
+  dropped vertically to the ground in the first (standing) training frame.
+
+Anchoring (stance and landing): the toe tip is pinned on the ground at ``(x_pin, z = 0)``
+and the foot's pitch ``phi`` (angle of the heel-toe line above the ground, ``phi = 0``
+flat, ``phi > 0`` heel up) is a decision spline.  The joint angles then fix the base:
+with ``d`` the toe-minus-heel vector and ``r`` the toe tip, both in the base frame,
+``pitch = atan2(d_z, d_x) + phi`` and ``(x, z) = (x_pin, 0) - (R_y(pitch) r)_{x,z}``.
+The foot constraints hold by construction (kinematic anchoring).  The toe tip is the
+pivot because the captured push-off rolls over it (the ball rises ~8 cm before
+takeoff while the toe tip stays down) and the landing is toe-first.
+
+Contact forces: three points per foot (heel, ball, toe), each with a 2-D friction
+pyramid written with its two edge generators ``lam1 (mu, 1) + lam2 (-mu, 1)``,
+``lam >= 0``.  In the sagittal plane this pyramid *is* the exact cone ``|fx| <= mu fz``;
+lateral forces are zero by symmetry.  Unilateral forces and the centre of pressure
+inside the foot (between heel and toe) follow from ``lam >= 0``.  The heel and ball can
+push only when they are on the ground: relaxed complementarity
+``(lam_heel1 + lam_heel2) * z_heel <= eps`` (same for the ball), with ``z_heel >= 0``
+(``phi >= 0``) and ``z_ball >= -ball_tolerance`` (soft sole under the ball).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+
+from ..dynamics import SymbolicModel
+from ..mocap.symmetry import SymmetryMap
+from .training import BALL, FOOT, TOE
+
+POINTS = ("heel", "ball", "toe")
+MU = 0.4
+
+
+def joint_embedding(smap: SymmetryMap) -> np.ndarray:
+    """Matrix E (nq - 7, n_learned) with q[7:] = E y (right side mirrored)."""
+    E = np.zeros((smap.nq, smap.n_learned))
+    E[smap.learned_q, np.arange(smap.n_learned)] = 1.0
+    for r_idx, y_idx, f in smap.copied:
+        E[r_idx, y_idx] = f
+    return E[7:]
+
+
+@dataclass
+class FootGeometry:
+    """Heel point in the ``lfoot`` frame."""
+
+    heel_offset: np.ndarray
+
+    @classmethod
+    def from_standing(cls, model: pin.Model, q_stand: np.ndarray) -> "FootGeometry":
+        d = model.createData()
+        pin.framesForwardKinematics(model, d, q_stand)
+        M = d.oMf[model.getFrameId(FOOT)]
+        ground = min(d.oMf[model.getFrameId(BALL)].translation[2], d.oMf[model.getFrameId(TOE)].translation[2])
+        heel = M.translation.copy()
+        heel[2] = ground
+        return cls(M.rotation.T @ (heel - M.translation))
+
+
+def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
+    """(q) -> P (3 x 3): world heel, ball, toe of the left foot as columns."""
+    q = ca.SX.sym("q", sym.nq)
+    pf, Rf = sym.frame_placement(FOOT)(q)
+    heel = pf + Rf @ ca.DM(geom.heel_offset)
+    ball = sym.frame_placement(BALL)(q)[0]
+    toe = sym.frame_placement(TOE)(q)[0]
+    return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, toe)], ["q"], ["P"])
+
+
+def anchor_function(sym: SymbolicModel, smap: SymmetryMap, geom: FootGeometry) -> ca.Function:
+    """(y [n_learned], phi, x_pin) -> base (x, z, pitch) with the toe tip pinned at (x_pin, 0)."""
+    y, phi, xpin = ca.SX.sym("y", smap.n_learned), ca.SX.sym("phi"), ca.SX.sym("x_pin")
+    E = ca.DM(joint_embedding(smap))
+    q = ca.vertcat(0, 0, 0, 0, 0, 0, 1, E @ y)
+    P = points_function(sym, geom)(q)
+    heel, toe = P[:, 0], P[:, 2]
+    dvec = toe - heel
+    pitch = ca.atan2(dvec[2], dvec[0]) + phi
+    c, s = ca.cos(pitch), ca.sin(pitch)
+    rx = c * toe[0] + s * toe[2]
+    rz = -s * toe[0] + c * toe[2]
+    b = ca.vertcat(xpin - rx, -rz, pitch)
+    return ca.Function("anchor", [y, phi, xpin], [b], ["y", "phi", "x_pin"], ["b"])
+
+
+def generator_matrix(mu: float = MU) -> np.ndarray:
+    """G (2 x 2): columns are the pyramid edges (fx, fz) = (mu, 1), (-mu, 1)."""
+    return np.array([[mu, -mu], [1.0, 1.0]])
+
+
+def point_forces(lam, mu: float = MU):
+    """(fx, fz) of heel, ball, toe from 6 generator weights (works on numpy and casadi)."""
+    G = generator_matrix(mu)
+    out = []
+    for k in range(3):
+        l1, l2 = lam[2 * k], lam[2 * k + 1]
+        out.append((G[0, 0] * l1 + G[0, 1] * l2, l1 + l2))
+    return out
+
+
+def toe_wrench(lam, P, mu: float = MU):
+    """World-aligned wrench (6) at the toe tip of the point forces (casadi): force, moment about the toe."""
+    f = point_forces(lam, mu)
+    fx = f[0][0] + f[1][0] + f[2][0]
+    fz = f[0][1] + f[1][1] + f[2][1]
+    my = 0
+    for k in (0, 1):
+        rx, rz = P[0, k] - P[0, 2], P[2, k] - P[2, 2]
+        my = my + rz * f[k][0] - rx * f[k][1]
+    return ca.vertcat(fx, 0, fz, 0, my, 0)

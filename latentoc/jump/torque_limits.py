@@ -1,0 +1,90 @@
+"""Joint torque limits tau_min, tau_max of Eq. 34 from the training motion's inverse dynamics.
+
+The training motion is smoothed by a cubic B-spline fit (``n_control`` points, Eq. 23) of
+its learned coordinates and sagittal base, giving v and a.  At each frame in contact the
+contact forces are estimated by non-negative least squares: the heel, ball and toe of both
+feet each push with ``lam1 (mu, 1) + lam2 (-mu, 1)``, ``lam >= 0`` (so the fitted forces are
+unilateral, inside the friction cone mu = 0.4 and the centre of pressure is inside the foot)
+and the base rows of RNEA are matched, ``rnea_base = sum J^T f``.  In flight f = 0.  The
+joint torques are ``tau = rnea_joint - (J^T f)_joint``; the limits are their per-joint
+minimum and maximum over the motion, widened by ``margin`` times the joint's peak |tau|.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.optimize import nnls
+
+from ..spline import BSpline
+from .base import base_to_freeflyer
+from .contact import MU, FootGeometry, generator_matrix, joint_embedding
+from .training import BALL, FOOT, TOE, JumpTraining
+
+
+@dataclass
+class TrainingDynamics:
+    """Training inverse dynamics: torques (n, nv - 6), forces (n, 3 points, 2), residual (n, 6)."""
+
+    t: np.ndarray
+    tau: np.ndarray
+    forces: np.ndarray
+    base_residual: np.ndarray
+    tau_min: np.ndarray
+    tau_max: np.ndarray
+
+
+def smoothed_motion(tr: JumpTraining, E: np.ndarray, n_control: int = 40):
+    """q, v, a of the training motion from a B-spline fit (base and learned DOFs)."""
+    sp = BSpline(n_control, tr.duration)
+    Z = np.column_stack([tr.base, tr.Y])
+    P = sp.fit(tr.t, Z)
+    Zs, Zd, Zdd = (sp.evaluate(P, tr.t, k) for k in range(3))
+    q7, v6, a6 = base_to_freeflyer(Zs[:, :3], Zd[:, :3], Zdd[:, :3])
+    return (np.column_stack([q7, Zs[:, 3:] @ E.T]), np.column_stack([v6, Zd[:, 3:] @ E.T]),
+            np.column_stack([a6, Zdd[:, 3:] @ E.T]))
+
+
+def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: FootGeometry,
+                               in_contact: np.ndarray, mu: float = MU, margin: float = 0.1,
+                               n_control: int = 40) -> TrainingDynamics:
+    """Least-squares (NNLS) contact forces and joint torques of the training motion."""
+    E = joint_embedding(smap)
+    Q, V, A = smoothed_motion(tr, E, n_control)
+    d = model.createData()
+    G = generator_matrix(mu)
+    fids = {s: [model.getFrameId(s + n[1:]) for n in (FOOT, BALL, TOE)] for s in "lr"}
+    n = len(Q)
+    taus, forces, res = np.zeros((n, model.nv - 6)), np.zeros((n, 3, 2)), np.zeros((n, 6))
+    for i in range(n):
+        tau = pin.rnea(model, d, Q[i], V[i], A[i])
+        if in_contact[i]:
+            pin.computeJointJacobians(model, d, Q[i])
+            pin.framesForwardKinematics(model, d, Q[i])
+            cols = []
+            for k in range(3):  # heel, ball, toe
+                for gcol in G.T:
+                    gen = np.zeros(model.nv)
+                    ML = d.oMf[fids["l"][k]]
+                    p_left = ML.translation + (ML.rotation @ geom.heel_offset if k == 0 else 0.0)
+                    for s in "lr":
+                        fid = fids[s][k]
+                        M = d.oMf[fid]
+                        # heel point defined on the left foot; the right one is its mirror image
+                        p = p_left if s == "l" else p_left * np.array([1.0, -1.0, 1.0])
+                        J = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
+                        Jp = J[:3] - pin.skew(p - M.translation) @ J[3:]
+                        gen += Jp.T @ np.array([gcol[0], 0.0, gcol[1]])
+                    cols.append(gen)
+            Acols = np.array(cols).T
+            rows = [0, 2, 4]
+            lam, _ = nnls(Acols[rows], tau[rows])
+            gf = Acols @ lam
+            forces[i] = (G @ lam.reshape(3, 2).T).T
+        else:
+            gf = np.zeros(model.nv)
+        res[i] = tau[:6] - gf[:6]
+        taus[i] = tau[6:] - gf[6:]
+    peak = np.max(np.abs(taus), axis=0)
+    return TrainingDynamics(tr.t, taus, forces, res, taus.min(0) - margin * peak, taus.max(0) + margin * peak)

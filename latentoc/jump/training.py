@@ -1,0 +1,84 @@
+"""Symmetric jump model and training motion (Kang & Park 2015, Sect. 4.2, Table 5).
+
+* The model is built from :func:`~latentoc.mocap.symmetry.symmetrized_skeleton`
+  (63.86 kg, 1.75 m, de Leva masses) so that mirrored joint motions are exactly
+  symmetric.
+* The learned coordinates are the 37 left + centre DOFs of
+  :class:`~latentoc.mocap.symmetry.SymmetryMap`; the right side is the mirror image.
+  The centre DOFs that flip sign under the mirror (ry, rz of the spine, neck and head)
+  are set to zero in the training data: a symmetric motion cannot have them, and keeping
+  them would put the model's lateral base rows out of balance.
+* The base of the training motion is projected to the sagittal plane
+  (:mod:`.base`), and the motion is shifted so that the ground is ``z = 0`` and the
+  toe tip at the start is at ``x = 0``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import pinocchio as pin
+
+from ..human_models import broad_jump_sequences, cmu_skeleton
+from ..mocap.anthropometry import cmu_inertias
+from ..mocap.skeleton_model import build_model
+from ..mocap.symmetry import SymmetryMap, symmetrized_skeleton
+from .base import base_to_freeflyer, freeflyer_to_base
+
+BALL = "lfoot_end"
+TOE = "ltoes_end"
+FOOT = "lfoot"
+
+
+@lru_cache(maxsize=2)
+def jump_model(mass: float = 63.86, height: float = 1.75) -> tuple[pin.Model, SymmetryMap]:
+    """The symmetrised CMU humanoid (nq 63, nv 62) and its symmetry map."""
+    sk = symmetrized_skeleton(cmu_skeleton())
+    root, inert = cmu_inertias(sk, mass, height)
+    model = build_model(sk, inertias=inert, root_inertia=root, name="cmu_humanoid_sym")
+    return model, SymmetryMap(model, sk)
+
+
+def antisymmetric_centre(smap: SymmetryMap) -> np.ndarray:
+    """Indices (into the learned vector) of centre DOFs that flip sign under the mirror."""
+    return np.array([k for k, n in enumerate(smap.learned_names)
+                     if smap.centre_factor.get(n, 1.0) < 0], dtype=int)
+
+
+@dataclass
+class JumpTraining:
+    """One symmetric training jump: times, learned coordinates, sagittal base, full q."""
+
+    t: np.ndarray  # (n,)
+    Y: np.ndarray  # (n, 37) learned DOFs
+    base: np.ndarray  # (n, 3) x, z, pitch
+    Q: np.ndarray  # (n, 63) full symmetric configurations
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+
+def symmetric_motion(Q: np.ndarray, t: np.ndarray, model: pin.Model, smap: SymmetryMap) -> JumpTraining:
+    """Symmetrise captured configurations; ground at z = 0, starting toe tip at x = 0."""
+    Y = smap.to_learned(Q).copy()
+    Y[:, antisymmetric_centre(smap)] = 0.0
+    base = freeflyer_to_base(Q[:, :7])
+    Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
+    d = model.createData()
+    pin.framesForwardKinematics(model, d, Qs[0])
+    ball0 = d.oMf[model.getFrameId(BALL)].translation.copy()
+    toe0 = d.oMf[model.getFrameId(TOE)].translation.copy()
+    base[:, 0] -= toe0[0]
+    base[:, 1] -= min(ball0[2], toe0[2])
+    Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
+    return JumpTraining(np.asarray(t, float) - t[0], Y, base, Qs)
+
+
+def training_jumps(which: str | int = 0) -> list[JumpTraining]:
+    """Symmetric training jumps of take 01_01: ``0`` (the paper's single jump) or ``"all"``."""
+    model, smap = jump_model()
+    seqs = broad_jump_sequences()
+    chosen = seqs if which == "all" else [seqs[int(which)]]
+    return [symmetric_motion(Q, t, model, smap) for t, Q in chosen]

@@ -1,0 +1,29 @@
+"""Training inverse dynamics: NNLS contact forces reproduce the base wrench where they can."""
+import numpy as np
+
+from latentoc.jump.contact import FootGeometry
+from latentoc.jump.phases import training_phases
+from latentoc.jump.torque_limits import estimate_training_dynamics
+from latentoc.jump.training import jump_model, training_jumps
+
+
+def test_training_forces_and_limits():
+    model, smap = jump_model()
+    tr = training_jumps()[0]
+    ph = training_phases(model, tr)
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    contact = (tr.t <= ph.takeoff) | (tr.t >= ph.touchdown)
+    td = estimate_training_dynamics(model, smap, tr, geom, contact, margin=0.0)
+    W = 63.86 * 9.81
+    # forces are unilateral and in the cone by construction
+    assert np.all(td.forces[..., 1] >= -1e-9)
+    assert np.all(np.abs(td.forces[..., 0]) <= 0.4 * td.forces[..., 1] + 1e-9)
+    # the vertical force balance is reproduced well in stance (frames standing still)
+    still = np.where(tr.t < 0.15)[0]
+    assert np.max(np.abs(td.base_residual[still][:, 2])) < 0.1 * W
+    # the vertical force is what the captured motion needs (centroidal dP_z + m g), not just m g
+    fz = 2 * td.forces[still, :, 1].sum(axis=1)
+    assert np.all(fz > 0.5 * W)
+    # lateral rows vanish by symmetry; limits enclose the training torques
+    assert np.max(np.abs(td.base_residual[:, [1, 3, 5]])) < 1e-6 * W
+    assert np.all(td.tau_min <= td.tau.min(0) + 1e-9) and np.all(td.tau_max >= td.tau.max(0) - 1e-9)
