@@ -1,0 +1,54 @@
+"""`python -m latentoc`: list, solve (files + summary), clear errors with exit 2 and no files."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from latentoc.cli import main
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_list(capsys):
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert "arm-raise " in out and "arm-raise-small" in out
+
+
+def test_solve_writes_files_and_summary(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["solve", "arm-raise-small", "--quiet", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Solve_Succeeded" in text and "gain" in text and "result.json" in text
+    r = json.loads((out / "result.json").read_text())
+    assert r["success"] and r["problem"] == "arm-raise-small"
+    with np.load(out / "trajectory.npz") as f:
+        assert {"t", "q", "v", "a", "tau", "x", "P", "model"} <= set(f.files)
+
+
+@pytest.mark.parametrize("args, match", [
+    (["solve", "no-such"], "unknown problem 'no-such'; known problems"),
+    (["solve", "arm-raise-small", "--tube", "-1"], "must be positive"),
+    (["solve", "arm-raise-small", "--tube", "1e-12"], "infeasible"),
+    (["solve", "arm-raise-small", "--latent-dim", "9"], "latent dimension"),
+    (["solve", "arm-raise-small", "--control-points", "2"], "control points"),
+    (["sweep", "arm-raise-small", "--tubes", "0x"], "must be positive"),
+    (["bench", "nothing"], "unknown benchmark"),
+])
+def test_errors_exit_2_without_files(tmp_path, capsys, args, match):
+    out = tmp_path / "o"
+    code = main(args + (["--out", str(out)] if args[0] in ("solve", "sweep") else []))
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("latentoc: error: ") and match in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_module_entry_point_subprocess(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "latentoc", "solve", "arm-raise-small", "--tube", "-1",
+                        "--out", str(tmp_path / "o")], capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert p.returncode == 2 and p.stderr.startswith("latentoc: error:") and "Traceback" not in p.stderr
+    assert not (tmp_path / "o").exists()

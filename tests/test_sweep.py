@@ -1,0 +1,34 @@
+"""Sweeps: rows per tube and joint range, the Table 2 layout, atomic files."""
+
+import json
+
+import pytest
+
+from latentoc.problem import load_problem
+from latentoc.sweep import format_table, sweep, write_sweep
+
+
+@pytest.fixture(scope="module")
+def rows():
+    lines = []
+    out = sweep(load_problem("arm-raise-small"), ["200x"], [5.0], progress=lines.append)
+    assert len(lines) == 2 and lines[0].startswith("[1/2] tube 200x") and "joint range" in lines[1]
+    return out
+
+
+def test_rows(rows):
+    lat, jr = rows
+    assert lat["method"] == "latent" and lat["tube_spec"] == "200x" and lat["success"]
+    assert jr["method"] == "joint-range" and jr["joint_range_deg"] == 5.0 and jr["success"]
+    assert lat["cost"] < lat["cost_initial"] and jr["cost"] < jr["cost_initial"]
+
+
+def test_table_and_files(rows, tmp_path):
+    table = format_table(rows)
+    assert table.splitlines()[0].startswith("| tube | delta")
+    assert "| 200x |" in table and "+-5 deg" in table
+    j, md = write_sweep(rows, tmp_path, {"problem": "arm-raise-small"})
+    data = json.loads(j.read_text())
+    assert data["meta"]["problem"] == "arm-raise-small" and len(data["rows"]) == 2
+    assert md.read_text().strip() == table.strip()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sweep.json", "sweep.md"]
