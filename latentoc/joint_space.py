@@ -58,7 +58,7 @@ def build_joint_nlp(model: SymbolicModel, settings: TranscriptionSettings, t_tra
                      lbx=w0 - k, ubx=w0 + k,
                      lbg=np.concatenate(lbg) if lbg else np.zeros(0),
                      ubg=np.concatenate(ubg) if ubg else np.zeros(0),
-                     quad_t=quad_t, quad_w=quad_w, grid_t=grid_t)
+                     quad_t=quad_t, quad_w=quad_w, grid_t=grid_t, residual=tau)
 
 
 def joint_motion(model: SymbolicModel, spline: BSpline, P: np.ndarray, t: np.ndarray) -> dict[str, np.ndarray]:

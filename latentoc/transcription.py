@@ -72,6 +72,7 @@ class SplineNLP:
     quad_w: np.ndarray
     grid_t: np.ndarray
     tube_rows: slice | None = None  # rows of g holding sigma^2 (latent only)
+    residual: object = None  # MX tau (nv x K) at the quadrature nodes: J = sum_k w_k |tau_k|^2
 
     @property
     def w0(self) -> np.ndarray:
@@ -201,4 +202,4 @@ def build_latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: TranscriptionSe
                      nlp={"x": w, "f": J, "g": ca.vertcat(*g)},
                      lbx=np.full(n, -np.inf), ubx=np.full(n, np.inf),
                      lbg=np.concatenate(lbg), ubg=np.concatenate(ubg),
-                     quad_t=quad_t, quad_w=quad_w, grid_t=grid_t, tube_rows=slice(0, len(grid_t)))
+                     quad_t=quad_t, quad_w=quad_w, grid_t=grid_t, tube_rows=slice(0, len(grid_t)), residual=tau)
