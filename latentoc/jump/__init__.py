@@ -13,3 +13,14 @@ Modules, one concept each:
 * :mod:`.problem` - settings, solve, registration as the ``"broad-jump"`` solver;
 * :mod:`.verify` - 1 kHz recomputation with numeric Pinocchio.
 """
+
+
+def _register() -> None:
+    """Add the ``"broad-jump"`` solver to :data:`latentoc.solve.SOLVERS`."""
+    from ..solve import SOLVERS
+    from .problem import solve_jump_problem
+
+    SOLVERS["broad-jump"] = solve_jump_problem
+
+
+_register()

@@ -1,0 +1,41 @@
+"""Broad-jump benchmark (issue 6): setup, NLP build and Ipopt solve times per solve.
+
+Target: 20 s or less per solve (paper: 19 s in C++ on a 2014 quad-core i7); the build
+(casadi Functions of the 62-DOF model, GPDM mean derivatives, Ipopt set-up) is reported
+separately.  Run: ``python -m latentoc.benchmarks.jump_bench [--tubes 1.0 0.4] [--quick]``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print setup, build and solve time for each tube; returns 0."""
+    from latentoc.jump.problem import setup, solve_broad_jump
+    from latentoc.jump.transcription import JumpSettings
+
+    ap = argparse.ArgumentParser(prog="jump_bench", description=__doc__.splitlines()[0])
+    ap.add_argument("--tubes", type=float, nargs="+", default=[1.0])
+    ap.add_argument("--quick", action="store_true", help="small node count (6/6/8), no torque/polygon/complementarity")
+    ap.add_argument("--max-iter", type=int, default=400)
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    js = setup()
+    print(f"setup (model, symmetric training, GPDM d=3, phases, torque limits): {time.perf_counter() - t0:.2f} s")
+    for tube in args.tubes:
+        if args.quick:
+            s = JumpSettings(tube=tube, n_stance=6, n_flight=6, n_land=8, torque_limits=False, polygon=False,
+                             complementarity=False, max_iter=args.max_iter)
+        else:
+            s = JumpSettings(tube=tube, max_iter=args.max_iter)
+        r = solve_broad_jump(js, s)["result"]
+        print(f"tube {tube:g}: build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s, "
+              f"{r['iterations']} iterations, {r['status']}, distance {r['distance']:.3f} m "
+              f"(training {r['distance_initial']:.3f} m)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,267 @@
+"""The ``"broad-jump"`` problem: setup, solve, result fields (Sect. 4.2, Tables 5-6).
+
+:func:`setup` learns the GPDM on the symmetric training jump (37 learned DOF, d = 3; or on
+all jumps of the take with ``training="all"``), estimates the phases, the heel point and the
+torque limits, and fits the initial guess (the training path: latent points, foot pitch,
+flight base).  :func:`solve_broad_jump` builds and solves the NLP and returns a dict of
+result fields and trajectory arrays.  :func:`register` adds it to ``latentoc.solve.SOLVERS``
+when that layer exists.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..dynamics import SymbolicModel
+from ..gpdm import GPDM, GPDMSettings, learn_gpdm
+from ..spline import BSpline
+from .contact import FootGeometry
+from .phases import Phases, training_phases
+from .torque_limits import TrainingDynamics, estimate_training_dynamics
+from .training import BALL, FOOT, TOE, JumpTraining, jump_model, training_jumps
+from .transcription import JumpSettings, build_nlp
+
+
+@dataclass
+class JumpSetup:
+    model: pin.Model
+    smap: object
+    training: JumpTraining
+    gpdm: GPDM
+    phases: Phases
+    geom: FootGeometry
+    limits: TrainingDynamics
+    init: dict
+    distance_training: float
+    sym: SymbolicModel
+
+
+def _foot_pitch(model, Q, geom) -> tuple[np.ndarray, np.ndarray]:
+    """Training foot pitch phi (heel-toe line) and toe-tip x per frame."""
+    d = model.createData()
+    phi, bx = np.zeros(len(Q)), np.zeros(len(Q))
+    for i, q in enumerate(Q):
+        pin.framesForwardKinematics(model, d, q)
+        M = d.oMf[model.getFrameId(FOOT)]
+        heel = M.translation + M.rotation @ geom.heel_offset
+        ball = d.oMf[model.getFrameId(TOE)].translation
+        phi[i] = np.arctan2(heel[2] - ball[2], ball[0] - heel[0])
+        bx[i] = ball[0]
+    return phi, bx
+
+
+def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 11, torque_margin: float = 0.1,
+          gpdm_settings: GPDMSettings | None = None) -> JumpSetup:
+    """Everything the NLP needs, from the training data."""
+    model, smap = jump_model()
+    trs = training_jumps(training)
+    tr = trs[0]
+    gp = learn_gpdm([t.Y for t in trs] if len(trs) > 1 else tr.Y, gpdm_settings or GPDMSettings(latent_dim=latent_dim))
+    phases = training_phases(model, tr)
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
+    limits = estimate_training_dynamics(model, smap, tr, geom, contact, margin=torque_margin)
+    X = gp.latent_trajectories()[0]
+    P = BSpline(n_control, tr.duration).fit(tr.t, X)
+    phi, bx = _foot_pitch(model, tr.Q, geom)
+    td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
+    init = {"P": P, "phi": phi, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
+    return JumpSetup(model, smap, tr, gp, phases, geom, limits, init,
+                     float(np.median(bx[td:]) - bx[0]), SymbolicModel(model))
+
+
+def initial_guess(js: JumpSetup, s: JumpSettings) -> dict:
+    """Spline fits of the training foot pitch and flight base."""
+    t, ph = js.init["t"], js.phases
+    st = t <= ph.takeoff + 1e-9
+    la = t >= ph.touchdown - 1e-9
+    fl = (t >= ph.takeoff - 1e-9) & (t <= ph.touchdown + 1e-9)
+    phi_s = BSpline(s.n_phi_stance, ph.takeoff).fit(t[st], np.maximum(js.init["phi"][st], 0), fix_ends=False)[:, 0]
+    phi_l = BSpline(s.n_phi_land, ph.duration - ph.touchdown).fit(t[la] - ph.touchdown, np.maximum(js.init["phi"][la], 0),
+                                                                 fix_ends=False)[:, 0]
+    fb = BSpline(s.n_flight + 2, ph.touchdown - ph.takeoff).fit(np.clip(t[fl] - ph.takeoff, 0, None), js.init["base"][fl],
+                                                              fix_ends=False)
+    return {"P": js.init["P"], "phi_s": phi_s, "phi_l": phi_l, "flight": fb, "x_L": js.init["x_L"]}
+
+
+def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None) -> dict:
+    """Build and solve; returns {"result": {...}, "trajectory": {...}, "nlp": JumpNLP}."""
+    s = settings or JumpSettings()
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    t0 = time.perf_counter()
+    sol = nlp.solver(x0=nlp.x0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+    solve_time = time.perf_counter() - t0
+    stats = nlp.solver.stats()
+    w = np.array(sol["x"]).ravel()
+    g = np.array(sol["g"]).ravel()
+    viol = np.maximum(nlp.lbg - g, 0) + np.maximum(g - nlp.ubg, 0)
+    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(w))}
+    distance = float(parts["x_L"].ravel()[0])
+    worst = {}
+    for name, v in zip(nlp.names, viol):
+        worst[name] = max(worst.get(name, 0.0), float(v))
+    result = {
+        "problem": "broad-jump", "tube": s.tube, "status": stats["return_status"], "success": bool(stats["success"]),
+        "iterations": int(stats["iter_count"]), "build_time_s": nlp.build_time, "solve_time_s": solve_time,
+        "objective": float(sol["f"]), "distance_initial": js.distance_training, "distance": distance,
+        "performance_gain_pct": 100.0 * (distance - js.distance_training) / js.distance_training,
+        "max_constraint_violation": float(viol.max()), "constraint_violation_by_kind": worst,
+        "settings": asdict(s),
+    }
+    return {"result": result, "parts": parts, "nlp": nlp, "settings": s}
+
+
+# ------------------------------------------------------------------ trajectory export
+def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
+    """Arrays on a 1 kHz grid and per node: t, q, v, a, tau, contact wrench, sigma2, phases."""
+    import casadi as ca
+
+    from .base import base_to_freeflyer
+    from .contact import joint_embedding
+    from .transcription import anchored_function
+
+    s, parts, nlp = out["settings"], out["parts"], out["nlp"]
+    ph = js.phases
+    sp, sps, spl, spf = nlp.meta["splines"]
+    P = parts["P"]
+    t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
+    X, Xd, Xdd = (sp.evaluate(P, t, k) for k in range(3))
+    gp = js.gpdm
+    x = ca.SX.sym("x", gp.latent_dim)
+    xd = ca.SX.sym("xd", gp.latent_dim)
+    xdd = ca.SX.sym("xdd", gp.latent_dim)
+    y = gp.mean_function()(x)
+    yd = ca.jtimes(y, x, xd)
+    ydd = ca.jtimes(y, x, xdd) + ca.jtimes(yd, x, xd)
+    fy = ca.Function("y", [x, xd, xdd], [y, yd, ydd, gp.variance_function()(x)]).map(len(t))
+    Y, Yd, Ydd, S2 = (np.array(v).T for v in fy(X.T, Xd.T, Xdd.T))
+    anch = anchored_function(js.sym, js.smap, gp, js.geom).map(len(t))
+    st, fl = t <= ph.takeoff, (t > ph.takeoff) & (t < ph.touchdown)
+    la = t >= ph.touchdown
+    phi = np.zeros((3, len(t)))
+    for k in range(3):
+        phi[k, st] = sps.evaluate(parts["phi_s"], np.clip(t[st], 0, sps.duration), k)[:, 0]
+        phi[k, la] = spl.evaluate(parts["phi_l"], np.clip(t[la] - ph.touchdown, 0, spl.duration), k)[:, 0]
+    xpin = np.where(la, float(parts["x_L"].ravel()[0]), 0.0)
+    B = [np.array(v).T for v in anch(X.T, Xd.T, Xdd.T, phi[0][None], phi[1][None], phi[2][None], xpin[None])]
+    tf = np.clip(t[fl] - ph.takeoff, 0, spf.duration)
+    for k in range(3):
+        B[k][fl] = spf.evaluate(parts["flight"], tf, k)
+    q7, v6, a6 = base_to_freeflyer(*B)
+    E = joint_embedding(js.smap)
+    Q, V, A = np.column_stack([q7, Y @ E.T]), np.column_stack([v6, Yd @ E.T]), np.column_stack([a6, Ydd @ E.T])
+    # contact wrench per foot (world-aligned at the toe tip): node values, linear in time within a phase
+    grid = nlp.meta["grid"]
+    mass = nlp.meta["mass"]
+    W = mass * 9.81
+    lam = parts["lam"] * W
+    from .contact import point_forces
+    nS = len(grid["stance"])
+    node_t = np.concatenate([grid["stance"], grid["land"]])
+    node_f = np.array([[sum(f[0] for f in point_forces(lam[:, j], s.mu)), sum(f[1] for f in point_forces(lam[:, j], s.mu))]
+                       for j in range(lam.shape[1])])
+    # moment about the toe from the node's point forces needs the node's geometry: recompute from q at nodes
+    wrench = np.zeros((len(t), 6))
+    node_w = np.zeros((len(node_t), 6))
+    d = js.model.createData()
+    fid = {n: js.model.getFrameId(n) for n in ("lfoot", "lfoot_end", "ltoes_end")}
+    node_q = np.zeros((len(node_t), js.model.nq))
+    for j, tj in enumerate(node_t):
+        i = int(np.argmin(np.abs(t - tj)))
+        if j == nS and tj >= ph.touchdown:  # landing node at touchdown: post-impact configuration
+            i = int(np.argmax(la))
+        node_q[j] = Q[i]
+        pin.framesForwardKinematics(js.model, d, Q[i])
+        M = d.oMf[fid["lfoot"]]
+        pts = [M.translation + M.rotation @ js.geom.heel_offset, d.oMf[fid["lfoot_end"]].translation,
+               d.oMf[fid["ltoes_end"]].translation]
+        fs = point_forces(lam[:, j], s.mu)
+        my = sum((pts[k][2] - pts[2][2]) * fs[k][0] - (pts[k][0] - pts[2][0]) * fs[k][1] for k in (0, 1))
+        node_w[j] = [node_f[j, 0], 0.0, node_f[j, 1], 0.0, my, 0.0]
+    for mask, sl in ((st, slice(0, nS)), (la, slice(nS, None))):
+        for c in range(6):
+            wrench[mask, c] = np.interp(t[mask], node_t[sl], node_w[sl, c])
+    tau = np.zeros((len(t), js.model.nv - 6))
+    for i in range(len(t)):
+        full = pin.rnea(js.model, d, Q[i], V[i], A[i])
+        if st[i] or la[i]:
+            pin.computeJointJacobians(js.model, d, Q[i])
+            pin.updateFramePlacements(js.model, d)
+            J = sum(pin.getFrameJacobian(js.model, d, js.model.getFrameId(n), pin.LOCAL_WORLD_ALIGNED)
+                    for n in ("ltoes_end", "rtoes_end"))
+            full = full - J.T @ wrench[i]
+        tau[i] = full[6:]
+    return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "contact": (st | la).astype(np.int8),
+            "sigma2": S2.ravel(), "latent": X, "control_points": P, "node_t": node_t, "node_wrench": node_w,
+            "node_lambda": lam.T, "contact_frames": np.array(["ltoes_end", "rtoes_end"]),
+            "contact_points": np.array(["heel", "ball", "toe"]), "heel_offset": js.geom.heel_offset,
+            "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,
+            "tau_min": js.limits.tau_min, "tau_max": js.limits.tau_max,
+            "model": js.model.saveToString()}
+
+
+# ------------------------------------------------------------------ solve layer glue
+_SETUP_CACHE: dict = {}
+
+
+def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSettings:
+    """JumpSettings from a :class:`latentoc.problem.Problem` (``[options]`` table)."""
+    o = problem.options
+    h = hessian or problem.hessian
+    return JumpSettings(tube=float(tube), mu=float(o.get("friction", 0.4)), n_control=int(problem.control_points),
+                        n_stance=int(o.get("n_stance", 10)), n_flight=int(o.get("n_flight", 9)),
+                        n_land=int(o.get("n_land", 14)), max_iter=int(problem.max_iter), tol=float(problem.tol),
+                        hessian="limited-memory" if h in ("lbfgs", "limited-memory") else "exact",
+                        torque_limits=bool(o.get("torque_limits", True)), polygon=bool(o.get("polygon", True)),
+                        complementarity=bool(o.get("complementarity", True)))
+
+
+def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=None, hessian=None,
+                       method: str = "latent", joint_range_deg=None, gpdm=None, verbose: bool = False):
+    """``latentoc.solve.SOLVERS["broad-jump"]``: solve, verify on 1 kHz, return a Solution.
+
+    ``gpdm`` from the generic layer is ignored: the jump learns its own GPDM on the
+    symmetric 37 learned DOFs.  ``cost`` in the result is the jump distance (maximised).
+    """
+    from ..solve import Solution, SolveError, resolve_tube
+    from .verify import verify
+
+    if method != "latent":
+        raise SolveError(f"broad-jump supports method 'latent' only, got {method!r}")
+    if hessian not in (None, "exact", "lbfgs"):
+        raise SolveError(f"hessian must be 'exact' or 'lbfgs', got {hessian!r}")
+    o = problem.options
+    training = "all" if o.get("training_jumps", "one") == "all" else 0
+    key = (training, latent_dim or problem.latent_dim, control_points or problem.control_points,
+           float(o.get("torque_margin", 0.1)))
+    t0 = time.perf_counter()
+    if key not in _SETUP_CACHE:
+        _SETUP_CACHE[key] = setup(training, key[1], key[2], key[3])
+    js = _SETUP_CACHE[key]
+    gpdm_time = time.perf_counter() - t0
+    spec = problem.tube if tube is None else tube
+    delta = resolve_tube(spec, js.gpdm.tube_size())
+    if not delta > 0:
+        raise SolveError(f"tube must be positive, got {spec!r}")
+    s = settings_from_problem(problem, delta, hessian)
+    s.n_control = int(key[2])
+    s.print_level = 5 if verbose else 0
+    out = solve_broad_jump(js, s)
+    traj = trajectory(js, out)
+    checks = verify(js.model, traj, s.mu)
+    r = out["result"]
+    r.update({"problem": problem.name, "kind": problem.kind, "method": "latent", "tube_spec": spec,
+              "tube_training": js.gpdm.tube_size(), "tube_relative": delta * js.gpdm.beta[2],
+              "latent_dim": js.gpdm.latent_dim, "control_points": s.n_control, "gpdm_time_s": gpdm_time,
+              "cost_initial": r["distance_initial"], "cost": r["distance"],
+              "cost_meaning": "jump distance of the toe tip in metres (maximised, Eq. 33)",
+              "friction": s.mu, "restitution_paper": o.get("restitution", 0.5), "restitution_used": 0.0,
+              "max_tube_violation": max(0.0, float(np.max(traj["sigma2"])) - delta),
+              "n_variables": int(out["nlp"].x0.size), "n_constraints": int(out["nlp"].lbg.size)})
+    r.update(checks)
+    r.pop("settings", None)
+    r["settings"] = {k: v for k, v in asdict(s).items()}
+    return Solution(result=r, trajectory=traj)

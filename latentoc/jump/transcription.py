@@ -1,0 +1,281 @@
+"""The broad-jump NLP (Kang & Park 2015, Sect. 4.2, Eq. 33-36), solved by Ipopt.
+
+Decision variables
+------------------
+* the free latent control points P[1:-1] of the B-spline x(t) (m = 11, d = 3; the end
+  points stay on the training path, Sect. 4.2 "boundary conditions");
+* the foot pitch splines phi_s (stance) and phi_l (landing) of the toe-pinned anchoring
+  (:mod:`.contact`) and the landing toe position x_L;
+* the flight base spline (x, z, pitch), ``n_flight + 2`` control points per coordinate;
+* contact force generator weights (6 per contact node) and the touchdown impulse (6).
+
+Joint motion: y = mu_Q(x(t)) (GPDM mean, Eq. 18), y' and y'' by the chain rule
+(Eq. 26-28); the right side is the mirror image.  Base: anchored in stance and landing,
+ballistic in flight (forward "hybrid dynamics" as in the paper, written as collocation:
+the base rows of RNEA equal sum J^T f at every node, f = 0 in flight, a square system for
+the flight spline given the takeoff position and velocity).
+
+Impact at touchdown: perfectly inelastic for the feet (restitution 0): the toe tip stops
+(anchoring), the joints keep their (prescribed, continuous) velocities, and the base
+velocity jumps by ``M_bb (v+ - v-) = (J^T Pi)_base`` with the ground impulse Pi built from
+the same unilateral friction-pyramid generators as the forces (so Pi is unilateral and in
+the cone).  The paper's restitution 0.5 belongs to its penalty-contact simulator; with
+feet that must stay on the ground after landing, a bouncing contact would start a second
+flight, which the fixed phase sequence excludes.
+
+Constraints (hard): base rows (sagittal x, z, pitch; the lateral rows vanish by symmetry
+and are checked in :mod:`.verify`), tube sigma^2 <= delta (Eq. 29), torque limits (Eq. 34),
+contact-force cone/unilateral/CoP (by the generators), heel/toe complementarity, no
+ground penetration in flight, ZMP in the support polygon over the landing and the projected
+COM in it once the landing has settled (Eq. 35, 36).
+Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+
+from ..dynamics import SymbolicModel
+from ..gpdm import GPDM
+from ..spline import BSpline
+from .base import base_function
+from .contact import MU, FootGeometry, anchor_function, toe_wrench, joint_embedding, points_function, point_forces
+from .phases import Phases
+from .support_polygon import symbolic_rows
+from .torque_limits import TrainingDynamics
+from .zmp import G, zmp
+
+SAGITTAL_ROWS = [0, 2, 4]
+
+
+@dataclass
+class JumpSettings:
+    """Table 5 parameters and discretisation."""
+
+    tube: float = 0.0005
+    mu: float = MU
+    n_control: int = 11
+    n_stance: int = 10
+    n_flight: int = 9
+    n_land: int = 14
+    n_phi_stance: int = 5
+    n_phi_land: int = 6
+    complementarity_eps: float = 1e-4  # body weights x metres
+    ball_tolerance: float = 0.02
+    max_iter: int = 400
+    tol: float = 1e-5
+    hessian: str = "limited-memory"  # or "exact"
+    print_level: int = 0
+    torque_limits: bool = True
+    complementarity: bool = True
+    polygon: bool = True
+
+
+@dataclass
+class JumpNLP:
+    """Built NLP and the pieces needed to read a solution."""
+
+    solver: ca.Function
+    x0: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    unpack: ca.Function
+    names: list[str]
+    build_time: float
+    meta: dict = field(default_factory=dict)
+
+
+def node_function(sym: SymbolicModel, smap, gpdm: GPDM, geom: FootGeometry, mu: float) -> ca.Function:
+    """(x, xd, xdd, b, bd, bdd, lam) -> res[6], tau[nv-6], P[3x3 flat], com, wrench (one foot, at the toe tip), sigma2, q, v, a."""
+    d = gpdm.latent_dim
+    x, xd, xdd = (ca.SX.sym(n, d) for n in ("x", "xd", "xdd"))
+    b, bd, bdd = (ca.SX.sym(n, 3) for n in ("b", "bd", "bdd"))
+    lam = ca.SX.sym("lam", 6)
+    y = gpdm.mean_function()(x)
+    yd = ca.jtimes(y, x, xd)
+    ydd = ca.jtimes(y, x, xdd) + ca.jtimes(yd, x, xd)
+    E = ca.DM(joint_embedding(smap))
+    q7, v6, a6 = base_function()(b, bd, bdd)
+    q, v, a = ca.vertcat(q7, E @ y), ca.vertcat(v6, E @ yd), ca.vertcat(a6, E @ ydd)
+    tau = sym.rnea(q, v, a)
+    P = points_function(sym, geom)(q)
+    w = toe_wrench(lam, P, mu)
+    gen = sym.frame_jacobian("ltoes_end")(q).T @ w + sym.frame_jacobian("rtoes_end")(q).T @ w
+    res = tau[:6] - gen[:6]
+    return ca.Function("jump_node", [x, xd, xdd, b, bd, bdd, lam],
+                       [res, tau[6:] - gen[6:], ca.vec(P), sym.com(q), w,
+                        gpdm.variance_function()(x), q, v, a],
+                       ["x", "xd", "xdd", "b", "bd", "bdd", "lam"],
+                       ["res", "tau", "P", "com", "wrench", "sigma2", "q", "v", "a"])
+
+
+def anchored_function(sym: SymbolicModel, smap, gpdm: GPDM, geom: FootGeometry) -> ca.Function:
+    """(x, xd, xdd, phi, phid, phidd, x_pin) -> b, bd, bdd of the toe-pinned base."""
+    d = gpdm.latent_dim
+    x, xd, xdd = (ca.SX.sym(n, d) for n in ("x", "xd", "xdd"))
+    phi, phid, phidd, xpin = (ca.SX.sym(n) for n in ("phi", "phid", "phidd", "x_pin"))
+    y = gpdm.mean_function()(x)
+    b = anchor_function(sym, smap, geom)(y, phi, xpin)
+    z, zd, zdd = ca.vertcat(x, phi), ca.vertcat(xd, phid), ca.vertcat(xdd, phidd)
+    bd = ca.jtimes(b, z, zd)
+    bdd = ca.jtimes(b, z, zdd) + ca.jtimes(bd, z, zd)
+    return ca.Function("anchored_base", [x, xd, xdd, phi, phid, phidd, xpin], [b, bd, bdd],
+                       ["x", "xd", "xdd", "phi", "phid", "phidd", "x_pin"], ["b", "bd", "bdd"])
+
+
+def _basis(sp: BSpline, t: np.ndarray, offset: float = 0.0) -> list[np.ndarray]:
+    return [sp.basis(np.clip(t - offset, 0, sp.duration), k) for k in range(3)]
+
+
+def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Phases,
+              limits: TrainingDynamics, settings: JumpSettings, init: dict,
+              sym: SymbolicModel | None = None) -> JumpNLP:
+    """Assemble the NLP; ``init`` holds initial guesses (P, phi_s, phi_l, flight, x_L, lam)."""
+    t0 = time.perf_counter()
+    s = settings
+    sym = sym or SymbolicModel(model)
+    mass = float(sum(i.mass for i in model.inertias))
+    dlat = gpdm.latent_dim
+    grid = phases.grid(s.n_stance, s.n_flight, s.n_land)
+    T = phases.duration
+    sp = BSpline(s.n_control, T)
+    sps = BSpline(s.n_phi_stance, phases.takeoff)
+    spl = BSpline(s.n_phi_land, T - phases.touchdown)
+    spf = BSpline(s.n_flight + 2, phases.touchdown - phases.takeoff)
+
+    # ---------------------------------------------------------------- variables
+    Pfix = np.asarray(init["P"], float)
+    Pfree = ca.MX.sym("P", s.n_control - 2, dlat)
+    Pm = ca.vertcat(ca.DM(Pfix[:1]), Pfree, ca.DM(Pfix[-1:]))
+    cs = ca.MX.sym("phi_s", s.n_phi_stance)
+    cl = ca.MX.sym("phi_l", s.n_phi_land)
+    Cf = ca.MX.sym("flight", s.n_flight + 2, 3)
+    xL = ca.MX.sym("x_L")
+    n_contact = s.n_stance + s.n_land
+    Lam = ca.MX.sym("lam", 6, n_contact)
+    Limp = ca.MX.sym("lam_impact", 6)
+    blocks = [("P", Pfree), ("phi_s", cs), ("phi_l", cl), ("flight", Cf), ("x_L", xL), ("lam", Lam), ("lam_impact", Limp)]
+    w = ca.veccat(*[v for _, v in blocks])
+
+    anch = anchored_function(sym, smap, gpdm, geom)
+    node = node_function(sym, smap, gpdm, geom, s.mu)
+
+    # latent and base per node: stance, flight, landing
+    ts, tf, tl = grid["stance"], grid["flight"], grid["land"]
+    lat = [[ca.sparsify(ca.DM(B)) @ Pm for B in _basis(sp, tt)] for tt in (ts, tf, tl)]
+    phis = [ca.sparsify(ca.DM(B)) @ cs for B in _basis(sps, ts)]
+    phil = [ca.sparsify(ca.DM(B)) @ cl for B in _basis(spl, tl, phases.touchdown)]
+    A_s = anch.map(len(ts))
+    bs = A_s(lat[0][0].T, lat[0][1].T, lat[0][2].T, phis[0].T, phis[1].T, phis[2].T, ca.DM.zeros(1, len(ts)))
+    A_l = anch.map(len(tl))
+    bl = A_l(lat[2][0].T, lat[2][1].T, lat[2][2].T, phil[0].T, phil[1].T, phil[2].T, ca.repmat(xL, 1, len(tl)))
+    bf = [(ca.sparsify(ca.DM(B)) @ Cf).T for B in _basis(spf, tf, phases.takeoff)]
+
+    Xall = [ca.horzcat(lat[0][k].T, lat[1][k].T, lat[2][k].T) for k in range(3)]
+    Ball = [ca.horzcat(bs[k], bf[k], bl[k]) for k in range(3)]
+    nS, nF, nL = len(ts), len(tf), len(tl)
+    W = mass * G
+    Lall = W * ca.horzcat(Lam[:, :nS], ca.DM.zeros(6, nF), Lam[:, nS:])  # Lam in body weights
+    N = nS + nF + nL
+    out = node.map(N)(Xall[0], Xall[1], Xall[2], Ball[0], Ball[1], Ball[2], Lall)
+    res, tau, Pp, com, dh, sig = out[:6]
+
+    g, lbg, ubg, names = [], [], [], []
+
+    def add(expr, lo, hi, name):
+        expr = ca.vec(expr)
+        n = expr.numel()
+        g.append(expr)
+        lbg.append(np.broadcast_to(lo, (n,)).astype(float))
+        ubg.append(np.broadcast_to(hi, (n,)).astype(float))
+        names.extend([name] * n)
+
+    add(res[SAGITTAL_ROWS, :] / W, 0.0, 0.0, "dynamics")
+    # joints whose torque vanishes by symmetry (centre ry/rz) have a zero range: checked in verify
+    act = np.where(limits.tau_max - limits.tau_min > 1e-6)[0]
+    if s.torque_limits:
+        sc = np.maximum(limits.tau_max[act] - limits.tau_min[act], 1.0)  # rows scaled to O(1)
+        add(tau[act.tolist(), :] / ca.DM(np.repeat(sc[:, None], N, 1)), np.tile(limits.tau_min[act] / sc, N),
+            np.tile(limits.tau_max[act] / sc, N), "torque")
+    add(sig, -np.inf, s.tube, "tube")
+    contact_cols = list(range(nS)) + list(range(nS + nF, N))
+    heel_z, ball_z = Pp[2, :], Pp[5, :]
+    for j, c in enumerate(contact_cols):
+        lam = Lam[:, j]
+        if s.complementarity:
+            add(heel_z[c] * (lam[0] + lam[1]), -np.inf, s.complementarity_eps, "heel_complementarity")
+            add(ball_z[c] * (lam[2] + lam[3]), -np.inf, s.complementarity_eps, "ball_complementarity")
+        add(ball_z[c], -s.ball_tolerance, np.inf, "ball_height")
+    add(ca.vertcat(phis[0], phil[0]), 0.0, np.inf, "heel_up")
+    for c in range(nS + 1, nS + nF - 1):  # flight interior: no penetration
+        add(Pp[[2, 5, 8], c], 0.0, np.inf, "flight_clearance")
+    # takeoff continuity (position, velocity)
+    add(bf[0][:, 0] - bs[0][:, -1], 0.0, 0.0, "takeoff_position")
+    add(bf[1][:, 0] - bs[1][:, -1], 0.0, 0.0, "takeoff_velocity")
+    # touchdown: position continuity and inelastic impact
+    add(bf[0][:, -1] - bl[0][:, 0], 0.0, 0.0, "touchdown_position")
+    ctd = nS + nF  # first landing column
+    qtd = out[6][:, ctd]
+    bfun = base_function()
+    v_minus = bfun(bl[0][:, 0], bf[1][:, -1], ca.DM.zeros(3))[1]
+    v_plus = bfun(bl[0][:, 0], bl[1][:, 0], ca.DM.zeros(3))[1]
+    Mbb = sym.mass_matrix(qtd)[:6, :6]
+    Ptd = ca.reshape(Pp[:, ctd], 3, 3)
+    wimp = toe_wrench(Limp * W * 0.1, Ptd, s.mu)  # impulse in units of 0.1 s of body weight
+    Jl, Jr = sym.frame_jacobian("ltoes_end")(qtd), sym.frame_jacobian("rtoes_end")(qtd)
+    imp = Mbb @ (v_plus - v_minus) - (Jl.T @ wimp + Jr.T @ wimp)[:6]
+    add(imp[SAGITTAL_ROWS] / W, 0.0, 0.0, "impact")
+    # landing: ZMP in the polygon at every landing node, COM once settled (Eq. 35, 36)
+    for c, tk in zip(range(nS + nF, N), tl):
+        P3 = ca.reshape(Pp[:, c], 3, 3)
+        rows = symbolic_rows(P3[:2, 0], P3[:2, 2])
+        # ZMP = centre of pressure of the total contact wrench on flat ground (see .zmp);
+        # equal to the centroidal-momentum formula when the base rows hold (checked in verify)
+        wr = dh[:, c]
+        px, py = P3[0, 2] - wr[4] / (wr[2] + 1e-9), 0.0
+        if s.polygon:
+            add(rows(ca.vertcat(px, py)), -np.inf, 0.0, "zmp_polygon")
+        if s.polygon and tk >= phases.settle - 1e-9:
+            add(rows(com[:2, c]), -np.inf, 0.0, "com_polygon")
+
+    G_ = ca.vertcat(*g)
+    x0_pin = 0.0
+    f = -(xL - x0_pin) + 1e-4 * ca.sumsqr(Lam) + 1e-4 * ca.sumsqr(Limp)  # tiny force regularisation
+
+    # bounds and initial guess
+    lbx = -np.inf * np.ones(w.numel())
+    ubx = np.inf * np.ones(w.numel())
+    off = 0
+    sizes = {}
+    for name, v in blocks:
+        sizes[name] = (off, off + v.numel())
+        off += v.numel()
+    for name in ("lam", "lam_impact"):
+        a, b_ = sizes[name]
+        lbx[a:b_] = 0.0
+    x0 = np.zeros(w.numel())
+    x0[slice(*sizes["P"])] = Pfix[1:-1].ravel(order="F")
+    x0[slice(*sizes["phi_s"])] = init["phi_s"]
+    x0[slice(*sizes["phi_l"])] = init["phi_l"]
+    x0[slice(*sizes["flight"])] = np.asarray(init["flight"]).ravel(order="F")
+    x0[slice(*sizes["x_L"])] = init["x_L"]
+    x0[slice(*sizes["lam"])] = init.get("lam", np.full(6 * n_contact, 1.0 / 12.0))
+    x0[slice(*sizes["lam_impact"])] = 0.5
+
+    nlp = {"x": w, "f": f, "g": G_}
+    opts = {"ipopt.max_iter": s.max_iter, "ipopt.tol": s.tol, "ipopt.print_level": s.print_level,
+            "print_time": False, "ipopt.hessian_approximation": s.hessian,
+            "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 10,
+            "ipopt.constr_viol_tol": 1e-6, "ipopt.mu_strategy": "adaptive"}
+    solver = ca.nlpsol("broad_jump", "ipopt", nlp, opts)
+    unpack = ca.Function("unpack", [w], [Pm, cs, cl, Cf, xL, Lam, Limp],
+                         ["w"], ["P", "phi_s", "phi_l", "flight", "x_L", "lam", "lam_impact"])
+    build = time.perf_counter() - t0
+    return JumpNLP(solver, x0, lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), unpack, names, build,
+                   {"grid": grid, "splines": (sp, sps, spl, spf), "mass": mass})

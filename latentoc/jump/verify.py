@@ -1,0 +1,84 @@
+"""Post-check of a jump on a 1 kHz grid with numeric Pinocchio (issue 6 verification).
+
+From exported arrays only (``t``, ``q``, ``v``, ``a``, ``wrench`` = the per-foot contact
+wrench at the toe tip, world-aligned, linearly interpolated between nodes, ``contact`` flag,
+``tau_min``/``tau_max``, ``sigma2``, the heel offset and the landing/settle times):
+
+* base-wrench residual: ``max |rnea(q, v, a)[:6] - sum_feet J^T w|`` over all 6 rows, as a
+  fraction of body weight (``pinocchio.rnea``, frame Jacobians);
+* the wrench the motion *needs*: the 3 sagittal base rows solved for (fx, fz, my) of
+  each (symmetric) foot; from it the minimum normal force, the maximum friction ratio
+  |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe);
+* ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
+  projected COM against the support polygon (:mod:`.support_polygon`) during landing
+  (COM once settled);
+* joint torques ``rnea[6:] - (J^T w)[6:]`` against tau_min, tau_max (joints with a
+  non-zero range; the others must vanish by symmetry);
+* the tube: max sigma^2.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .support_polygon import margin, support_polygon
+from .training import FOOT, TOE
+from .zmp import G, zmp
+
+
+def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
+    """Verification numbers (see module docstring)."""
+    t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
+    Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)
+    heel_off = np.asarray(arrays["heel_offset"])
+    t_td, t_settle = float(arrays["touchdown"]), float(arrays["settle"])
+    tmin, tmax = np.asarray(arrays["tau_min"]), np.asarray(arrays["tau_max"])
+    d = model.createData()
+    mass = sum(i.mass for i in model.inertias)
+    W = mass * G
+    ids = {n: model.getFrameId(n) for n in (FOOT, TOE, "ltoes_end", "rtoes_end")}
+    res_max, lat_max, tau_viol, sym_tau = 0.0, 0.0, 0.0, 0.0
+    fz_min, ratio_max, cop_margin = np.inf, 0.0, np.inf
+    zmp_margin, com_margin = np.inf, np.inf
+    act = tmax - tmin > 1e-6
+    for i in range(len(t)):
+        q, v, a = Q[i], V[i], A[i]
+        tau = pin.rnea(model, d, q, v, a)
+        pin.computeJointJacobians(model, d, q)
+        pin.framesForwardKinematics(model, d, q)
+        JL = pin.getFrameJacobian(model, d, ids["ltoes_end"], pin.LOCAL_WORLD_ALIGNED)
+        JR = pin.getFrameJacobian(model, d, ids["rtoes_end"], pin.LOCAL_WORLD_ALIGNED)
+        gen = (JL + JR).T @ Wr[i] if contact[i] else np.zeros(model.nv)
+        r = tau[:6] - gen[:6]
+        res_max = max(res_max, float(np.max(np.abs(r))) / W)
+        lat_max = max(lat_max, float(np.max(np.abs(r[[1, 3, 5]]))) / W)
+        tj = tau[6:] - gen[6:]
+        tau_viol = max(tau_viol, float(np.max(np.maximum(tmin[act] - tj[act], 0) + np.maximum(tj[act] - tmax[act], 0))))
+        sym_tau = max(sym_tau, float(np.max(np.abs(tj[~act]))) if (~act).any() else 0.0)
+        if not contact[i]:
+            continue
+        # the wrench the motion needs: solve the sagittal base rows for (fx, fz, my)
+        B = (JL + JR).T[[0, 2, 4]][:, [0, 2, 4]]
+        fx, fz, my = np.linalg.solve(B, tau[[0, 2, 4]] - 0.0)
+        fz_min = min(fz_min, fz)
+        ratio_max = max(ratio_max, abs(fx) / max(fz, 1e-9))
+        toe = d.oMf[ids[TOE]].translation
+        M = d.oMf[ids[FOOT]]
+        heel = M.translation + M.rotation @ heel_off
+        cop = toe[0] - my / max(fz, 1e-9)
+        cop_margin = min(cop_margin, min(cop - heel[0], toe[0] - cop))
+        if t[i] >= t_td - 1e-9:
+            pts = np.array([heel, toe, heel * [1, -1, 1], toe * [1, -1, 1]])
+            As, bs = support_polygon(pts)
+            c = pin.centerOfMass(model, d, q)
+            dh = pin.computeCentroidalMomentumTimeVariation(model, d, q, v, a).vector
+            zmp_margin = min(zmp_margin, margin(As, bs, np.array(zmp(c, dh, mass))))
+            if t[i] >= t_settle - 1e-9:
+                com_margin = min(com_margin, margin(As, bs, c))
+    out = {"max_dynamics_residual": res_max, "max_lateral_residual": lat_max,
+           "min_normal_force": float(fz_min), "max_friction_ratio": ratio_max, "cop_margin": float(cop_margin),
+           "zmp_margin": float(zmp_margin), "com_margin": float(com_margin),
+           "max_torque_violation": tau_viol, "max_symmetric_torque": sym_tau}
+    if "sigma2" in arrays:
+        out["max_sigma2"] = float(np.max(arrays["sigma2"]))
+    return out
