@@ -6,7 +6,7 @@ import pinocchio as pin
 import pytest
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.latent_motion import gp_grid_function, latent_kinematics, numeric_latent_motion
+from latentoc.latent_motion import gp_grid_function, latent_kinematics, latent_motion_grid, numeric_latent_motion
 from latentoc.problem import load_problem
 from latentoc.robots import load_robot
 from latentoc.solve import problem_gpdm
@@ -59,3 +59,15 @@ def test_torques_match_pinocchio_rnea(setup):
         tau = pin.rnea(model, data, m["q"][k], m["v"][k], m["a"][k])
         assert np.allclose(m["tau"][k], tau, atol=1e-9)
         assert np.isclose(m["L"][k], tau @ tau)
+
+
+def test_grid_motion_matches_per_node_autodiff(setup):
+    gp, _, _ = setup
+    rng = np.random.default_rng(2)
+    K = 6
+    X = gp.X[::5][:K].T + 0.05 * rng.standard_normal((3, K))
+    Xd, Xdd = rng.standard_normal((3, K)), rng.standard_normal((3, K))
+    closed = latent_motion_grid(gp, K)(X, Xd, Xdd)
+    auto = latent_kinematics(gp).map(K)(X, Xd, Xdd)
+    for c, a in zip(closed, auto):
+        assert np.allclose(np.asarray(c), np.asarray(a), rtol=1e-10, atol=1e-12)
