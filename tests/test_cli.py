@@ -52,3 +52,15 @@ def test_module_entry_point_subprocess(tmp_path):
                         "--out", str(tmp_path / "o")], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert p.returncode == 2 and p.stderr.startswith("latentoc: error:") and "Traceback" not in p.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_unconverged_solve_exits_1_and_writes_only_with_keep_failed(tmp_path, capsys):
+    src = (REPO / "problems" / "arm-raise-small.toml").read_text()
+    f = tmp_path / "short.toml"
+    f.write_text(src.replace("max_iter = 200", "max_iter = 1"))
+    out = tmp_path / "o"
+    assert main(["solve", str(f), "--quiet", "--out", str(out)]) == 1
+    assert "Maximum_Iterations_Exceeded" in capsys.readouterr().out and not out.exists()
+    assert main(["solve", str(f), "--quiet", "--keep-failed", "--out", str(out)]) == 1
+    assert sorted(p.name for p in out.iterdir()) == ["result.json", "trajectory.npz"]
+    assert json.loads((out / "result.json").read_text())["success"] is False
