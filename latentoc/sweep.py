@@ -21,15 +21,19 @@ _FIELDS = ("method", "tube_spec", "tube", "tube_relative", "joint_range_deg", "l
            "max_tube_violation", "quadrature_error")
 
 
+def _print_now(line: str) -> None:
+    print(line, flush=True)
+
+
 def sweep(problem: Problem, tubes: Sequence[float | str], baseline_ranges: Sequence[float] | None = None,
           latent_dim: int | None = None, hessian: str | None = None,
-          progress: Callable[[str], None] | None = print) -> list[dict[str, Any]]:
+          progress: Callable[[str], None] | None = _print_now) -> list[dict[str, Any]]:
     """One row per solve (latent for each tube, then joint-range for each range)."""
     rows: list[dict[str, Any]] = []
     gp = problem_gpdm(problem, latent_dim)[0] if tubes else None
     total = len(tubes) + len(baseline_ranges or [])
     for i, tube in enumerate(tubes):
-        r = solve(problem, tube=tube, gpdm=gp, hessian=hessian).result
+        r = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian).result
         rows.append({k: r.get(k) for k in _FIELDS})
         if progress:
             progress(f"[{i + 1}/{total}] tube {tube}: delta {r['tube']:.4g}, cost {r['cost']:.2f}, "
