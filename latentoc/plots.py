@@ -30,7 +30,7 @@ FIGSIZES: dict[str, tuple[float, float]] = {
     "joint_curves": (12.0, 8.0),
     "torques": (12.0, 8.0),
     "contact_forces": (10.0, 6.0),
-    "zmp_com": (8.0, 6.0),
+    "zmp_com": (12.0, 5.0),
     "gain_vs_tube": (10.0, 4.5),
     "stick_frames": (14.0, 3.5),  # per row of frames
 }
@@ -320,12 +320,17 @@ def plot_contact_forces(t: np.ndarray, forces: np.ndarray, names: Sequence[str],
     return _save(fig, path)
 
 
-def plot_zmp_com(zmp: np.ndarray, com: np.ndarray, polygon: np.ndarray, path: str | Path) -> Path:
-    """Top view of the ZMP and ground-projected COM paths inside the support polygon (k, 2)."""
+def plot_zmp_com(zmp: np.ndarray, com: np.ndarray, polygon: np.ndarray, path: str | Path,
+                 t: np.ndarray | None = None) -> Path:
+    """ZMP and ground-projected COM against the support polygon (k, 2) (Eq. 35-36).
+
+    Left: top view (x, y).  Right: x against time with the polygon's x extent
+    shaded (the sagittal picture of a jump); without ``t``, against sample index.
+    """
     zmp, com = np.atleast_2d(zmp)[:, :2], np.atleast_2d(com)[:, :2]
     poly = np.asarray(polygon, dtype=float)[:, :2]
     fig = _figure("zmp_com")
-    ax = fig.add_subplot()
+    ax, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
     closed = np.vstack([poly, poly[:1]])
     ax.fill(closed[:, 0], closed[:, 1], color="lightgrey", alpha=0.6, label="support polygon")
     ax.plot(closed[:, 0], closed[:, 1], "k-", lw=1)
@@ -334,7 +339,17 @@ def plot_zmp_com(zmp: np.ndarray, com: np.ndarray, polygon: np.ndarray, path: st
     ax.plot(com[-1, 0], com[-1, 1], "bs", label="COM at end")
     ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]")
     ax.set_aspect("equal", "datalim")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
+    ax.set_title("top view", fontsize=9)
+    s = np.arange(len(zmp)) if t is None else np.asarray(t, dtype=float)
+    ax2.axhspan(poly[:, 0].min(), poly[:, 0].max(), color="lightgrey", alpha=0.6, label="support polygon (x)")
+    ax2.plot(s, zmp[:, 0], "r-", label="ZMP x")
+    ax2.plot(s, com[:, 0], "b-", label="COM x")
+    ax2.set_xlabel("t [s]" if t is not None else "sample")
+    ax2.set_ylabel("x [m]")
+    ax2.legend(fontsize=7)
+    ax2.set_title("forward direction", fontsize=9)
+    fig.tight_layout()
     return _save(fig, path)
 
 
@@ -511,15 +526,42 @@ def _inverse_dynamics(model: pin.Model, t: np.ndarray, Q: np.ndarray) -> np.ndar
     return np.array([pin.rnea(model, data, q, v, a) for q, v, a in zip(Q, V, A)])
 
 
+def _landing_balance(model: pin.Model, traj: Mapping[str, np.ndarray]) -> tuple[np.ndarray, ...]:
+    """ZMP and COM on the landing samples (t >= touchdown, in contact) and the support
+    polygon of both feet (heel and toe tip, mirrored) at the last sample, for a
+    ``broad-jump`` trajectory (see :mod:`latentoc.jump.verify`)."""
+    from .jump.training import FOOT, TOE
+    from .jump.zmp import zmp as zmp_point
+    t, Q, V, A = (np.asarray(traj[k]) for k in ("t", "q", "v", "a"))
+    land = t >= float(traj["touchdown"]) - 1e-9
+    if "contact" in traj:
+        land &= np.asarray(traj["contact"]).astype(bool)
+    data = model.createData()
+    mass = sum(i.mass for i in model.inertias)
+    zmp, com = [], []
+    for q, v, a in zip(Q[land], V[land], A[land]):
+        c = pin.centerOfMass(model, data, q)
+        dh = pin.computeCentroidalMomentumTimeVariation(model, data, q, v, a).vector
+        zmp.append(zmp_point(c, dh, mass))
+        com.append(c)
+    pin.framesForwardKinematics(model, data, Q[-1])
+    M = data.oMf[model.getFrameId(FOOT)]
+    heel = M.translation + M.rotation @ np.asarray(traj["heel_offset"])
+    toe = data.oMf[model.getFrameId(TOE)].translation
+    poly = np.array([[heel[0], -heel[1]], [toe[0], -toe[1]], [toe[0], toe[1]], [heel[0], heel[1]]])
+    return np.array(zmp).reshape(-1, 2), np.array(com).reshape(-1, 3), poly, t[land]
+
+
 def _solution_gpdm(out_dir: Path, result: Mapping[str, Any]) -> Any:
-    """The solution's GPDM: ``gpdm.npz`` beside the result, else re-learned from its
-    problem (deterministic), else None."""
+    """The solution's GPDM: ``gpdm.npz`` beside the result, else (for the arm's
+    ``latent-min-torque`` kind) re-learned from its problem, which is deterministic;
+    else None."""
     from .gpdm import GPDM
     if (out_dir / "gpdm.npz").exists():
         return GPDM.load(out_dir / "gpdm.npz")
     source = result.get("problem_source") or result.get("problem")
-    if not source or "latent_dim" not in result:
-        return None
+    if not source or "latent_dim" not in result or result.get("kind") != "latent-min-torque":
+        return None  # other kinds (the jump) learn their own GPDM: only a saved one is used
     try:
         from .problem import load_problem
         from .solve import problem_gpdm
@@ -560,25 +602,33 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
         qs = {"initial": q0[:, iq], **qs}
     written.append(plot_joint_curves(t, qs, names, plot_dir / "joint_angles.png"))
     if tau is not None:
-        taus = {"optimised": tau[:, iv]}
+        jv = iv - (model.nv - tau.shape[1])  # tau may hold the actuated joints only
+        taus = {"optimised": tau[:, jv]}
         if tau0 is not None:
-            taus = {"initial": tau0[:, iv], **taus}
+            taus = {"initial": tau0[:, jv], **taus}
         lo, hi = _pick(traj, "tau_min"), _pick(traj, "tau_max")
-        limits = (np.broadcast_to(lo, (model.nv,))[iv], np.broadcast_to(hi, (model.nv,))[iv]) \
+        limits = (np.broadcast_to(lo, tau.shape[1:])[jv], np.broadcast_to(hi, tau.shape[1:])[jv]) \
             if lo is not None and hi is not None else None
         written.append(plot_torques(t, taus, names, plot_dir / "torques.png", limits=limits))
     motions = {"optimised": q} if q0 is None else {"initial": q0, "optimised": q}
     written.append(plot_stick_frames(model, motions, plot_dir / "stick_frames.png", plane=plane))
 
     forces = _pick(traj, "contact_forces", "forces")
-    if forces is not None:
-        cnames = [str(n) for n in _pick(traj, "contact_frames", "contact_names")]
+    cnames = _pick(traj, "contact_frames", "contact_names")
+    if forces is None and "wrench" in traj and cnames is not None:  # one wrench per (symmetric) foot
+        mask = traj["contact"].astype(bool) if "contact" in traj else np.ones(len(t), bool)
+        forces = np.repeat((traj["wrench"][:, :3] * mask[:, None])[:, None, :], len(cnames), axis=1)
+    if forces is not None and cnames is not None:
         tf = _pick(traj, "t_contact", "t_forces")
-        written.append(plot_contact_forces(t if tf is None else tf, forces, cnames,
+        written.append(plot_contact_forces(t if tf is None else tf, forces, [str(n) for n in cnames],
                                            plot_dir / "contact_forces.png"))
     zmp, com, poly = _pick(traj, "zmp"), _pick(traj, "com"), _pick(traj, "support_polygon")
+    t_zmp = _pick(traj, "t_zmp")
+    if zmp is None and "touchdown" in traj and "heel_offset" in traj:
+        zmp, com, poly, t_zmp = _landing_balance(model, traj)
     if zmp is not None and com is not None and poly is not None:
-        written.append(plot_zmp_com(zmp, com, poly, plot_dir / "zmp_com.png"))
+        written.append(plot_zmp_com(zmp, com, poly, plot_dir / "zmp_com.png",
+                                    t=t_zmp if t_zmp is not None else (t if len(t) == len(zmp) else None)))
 
     x = _pick(traj, "x", "latent")
     gpdm = _solution_gpdm(out_dir, result) if x is not None else None

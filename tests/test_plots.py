@@ -187,3 +187,31 @@ def test_plot_solution_contacts(tmp_path):
     names = {p.name for p in plots.plot_solution(tmp_path)}
     assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png",
                      "zmp_com.png"}
+
+
+def test_plot_solution_jump_format(tmp_path):
+    """A broad-jump trajectory (actuated tau, one wrench per foot, touchdown, heel offset):
+    contact forces and landing balance are derived; a static pose has its ZMP at the COM."""
+    from latentoc.human_models import broad_jump_training_motion, build_cmu_humanoid
+
+    model = build_cmu_humanoid()
+    tj, Qj = broad_jump_training_motion()
+    t, Q = tj[::8], Qj[::8]
+    n = len(t)
+    wrench = np.zeros((n, 6))
+    wrench[:, 2] = 300.0
+    traj = {"t": t, "q": Q, "v": np.zeros((n, model.nv)), "a": np.zeros((n, model.nv)),
+            "tau": np.zeros((n, model.nv - 6)), "wrench": wrench, "contact": np.ones(n, np.int8),
+            "contact_frames": np.array(["ltoes_end", "rtoes_end"]), "touchdown": np.float64(t[n // 2]),
+            "heel_offset": np.array([-0.05, 0.0, 0.0]), "tau_min": -np.ones(model.nv - 6),
+            "tau_max": np.ones(model.nv - 6), "model": np.str_(model.saveToString())}
+    np.savez(tmp_path / "trajectory.npz", **traj)
+    (tmp_path / "result.json").write_text(json.dumps({"problem": "broad-jump", "kind": "broad-jump"}))
+    names = {p.name for p in plots.plot_solution(tmp_path)}
+    assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png", "zmp_com.png"}
+    zmp, com, poly, tz = plots._landing_balance(model, traj)
+    assert len(zmp) == len(com) == len(tz) == np.sum(t >= t[n // 2])
+    assert np.allclose(zmp, com[:, :2], atol=1e-9)  # static: ZMP = ground projection of the COM
+    data = model.createData()
+    assert np.allclose(com[-1], pin.centerOfMass(model, data, Q[-1]))
+    assert poly.shape == (4, 2) and np.allclose(poly[0, 1], -poly[3, 1])
