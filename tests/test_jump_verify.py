@@ -1,0 +1,57 @@
+"""1 kHz verification machinery on an exactly balanced static stance, and (opt-in) a quick solve."""
+import os
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from latentoc.jump.contact import FootGeometry
+from latentoc.jump.training import jump_model, training_jumps
+from latentoc.jump.verify import verify
+
+
+def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
+    model, _ = jump_model()
+    tr = training_jumps()[0]
+    q = tr.Q[0]
+    geom = FootGeometry.from_standing(model, q)
+    d = model.createData()
+    z = np.zeros(model.nv)
+    tau = pin.rnea(model, d, q, z, z)
+    pin.computeJointJacobians(model, d, q)
+    pin.framesForwardKinematics(model, d, q)
+    J = sum(pin.getFrameJacobian(model, d, model.getFrameId(f), pin.LOCAL_WORLD_ALIGNED) for f in ("ltoes_end", "rtoes_end"))
+    fx, fz, my = np.linalg.solve(J.T[[0, 2, 4]][:, [0, 2, 4]], tau[[0, 2, 4]])
+    wrench = np.tile([fx, 0, fz, 0, my, 0], (n, 1))
+    tj = tau[6:] - (J.T @ wrench[0])[6:]
+    return model, {"t": np.linspace(0, 0.004, n), "q": np.tile(q, (n, 1)), "v": np.zeros((n, model.nv)),
+                   "a": np.zeros((n, model.nv)), "wrench": wrench, "contact": np.ones(n, dtype=int),
+                   "heel_offset": geom.heel_offset, "touchdown": 0.0, "settle": 0.0,
+                   "tau_min": np.minimum(tj, 0) - 1.0, "tau_max": np.maximum(tj, 0) + 1.0}
+
+
+def test_static_stance_is_verified():
+    model, arrays = _static_arrays()
+    r = verify(model, arrays)
+    assert r["max_dynamics_residual"] < 1e-9 and r["max_lateral_residual"] < 1e-9
+    assert r["min_normal_force"] > 0.45 * 63.86 * 9.81  # each foot carries about half the weight
+    assert r["max_friction_ratio"] < 0.4
+    assert r["max_torque_violation"] == 0.0 and r["max_symmetric_torque"] < 1e-6
+    assert r["zmp_margin"] > 0 and r["com_margin"] > 0 and np.isclose(r["zmp_margin"], r["com_margin"])
+
+
+def test_wrong_wrench_is_caught():
+    model, arrays = _static_arrays()
+    arrays["wrench"] = arrays["wrench"] * 0.5
+    r = verify(model, arrays)
+    assert 0.4 < r["max_dynamics_residual"] < 0.6  # half the weight missing
+
+
+@pytest.mark.skipif(not os.environ.get("LATENTOC_SLOW"), reason="a jump solve takes minutes on 2 shared cores")
+def test_quick_solve_verifies():
+    from latentoc.problem import load_problem
+    from latentoc.solve import solve
+    p = load_problem("broad-jump")
+    p.options.update(torque_limits=False, polygon=False, complementarity=False)
+    r = solve(p, tube=0.2).result
+    assert r["success"] and r["max_dynamics_residual"] < 0.2 and r["max_lateral_residual"] < 1e-6
