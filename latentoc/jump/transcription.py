@@ -29,6 +29,18 @@ contact-force cone/unilateral/CoP (by the generators), heel/toe complementarity,
 ground penetration in flight, ZMP in the support polygon over the landing and the projected
 COM in it once the landing has settled (Eq. 35, 36).
 Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
+
+Status and known limits (measured, issue 6 report):
+
+* with ``torque_limits``, ``polygon`` and ``complementarity`` all on, Ipopt stops at a point
+  of local infeasibility (tube 1.0); the problem file switches them off by default;
+* constraints hold at the nodes only: the 1 kHz check (:mod:`.verify`) finds base-wrench
+  residuals of several body weights between the landing nodes (the latent path runs
+  fast through regions where the GPDM mean bends), so the node count or an
+  inter-node (e.g. collocation-interval) constraint must grow before the numbers can be
+  trusted;
+* solves take minutes with L-BFGS (target 20 s): the Jacobian of the 62-DOF RNEA through
+  the GPDM mean's second derivatives costs ~0.4 s per evaluation.
 """
 from __future__ import annotations
 
