@@ -1,4 +1,4 @@
-"""Figures of latentoc results as PNG files (Kang & Park 2015, Fig. 1, 3, 5, 7).
+"""Figures of latentoc results as PNG files (Kang & Park 2015, Fig. 1, 3, 4, 5, 7).
 
 Every ``plot_*`` function draws on its own :class:`matplotlib.figure.Figure`
 (no pyplot state), writes a PNG of a fixed pixel size (``FIGSIZES[name]`` inches
@@ -21,7 +21,8 @@ from matplotlib.ticker import NullFormatter
 __all__ = [
     "DPI", "FIGSIZES", "pixel_size", "tube_mesh", "joint_positions", "skeleton_segments",
     "plot_latent_tube", "plot_joint_curves", "plot_torques", "plot_contact_forces",
-    "plot_zmp_com", "plot_gain_vs_tube", "plot_stick_frames", "plot_solution",
+    "plot_zmp_com", "plot_gain_vs_tube", "plot_start_poses", "plot_stick_frames", "plot_solution",
+    "frame_indices", "PLANES", "SIDE_COLOURS",
 ]
 
 DPI = 100
@@ -32,6 +33,7 @@ FIGSIZES: dict[str, tuple[float, float]] = {
     "contact_forces": (10.0, 6.0),
     "zmp_com": (12.0, 5.0),
     "gain_vs_tube": (10.0, 4.5),
+    "start_poses": (12.0, 5.0),
     "stick_frames": (14.0, 3.5),  # per row of frames
 }
 PLANES = {"xz": (0, 2), "yz": (1, 2), "xy": (0, 1)}
@@ -416,6 +418,47 @@ def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
         ax.legend(fontsize=8)
     if title:
         fig.suptitle(title)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_start_poses(rows: Sequence[Mapping[str, Any]], path: str | Path,
+                     model: pin.Model | None = None, plane: str = "yz") -> Path:
+    """New start poses against tube size (Fig. 4, 5).
+
+    ``rows`` are :func:`latentoc.start_poses.start_pose_distances` rows (``tube``,
+    ``translational_distance`` (Eq. 31), ``pose_distance`` (Eq. 32) and ``q``).
+    Left: the distances against delta (Fig. 5).  Right, with ``model``: the
+    reconstructed start poses overlaid, lighter for larger tubes (Fig. 4).
+    """
+    rows = sorted(rows, key=lambda r: float(r["tube"]))
+    d = np.array([float(r["tube"]) for r in rows])
+    fig = _figure("start_poses")
+    ax, ax2 = fig.subplots(1, 2)
+    ax.plot(d, [r["translational_distance"] for r in rows], "o-", color="C0",
+            label="translational distance [m] (Eq. 31)")
+    ax.plot(d, [r["pose_distance"] for r in rows], "s-", color="C3", label="pose distance (Eq. 32)")
+    if np.all(d > 0):
+        ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel(r"tube size $\delta$")
+    ax.set_ylabel("distance from the start pose")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    if model is None or not rows or "q" not in rows[0]:
+        ax2.set_visible(False)
+    else:
+        i0, i1 = PLANES[plane]
+        for k, r in enumerate(rows):
+            grey = 0.75 * k / max(len(rows) - 1, 1)
+            S = skeleton_segments(model, np.asarray(r["q"], dtype=float))
+            for j, (a, b) in enumerate(S):
+                ax2.plot([a[i0], b[i0]], [a[i1], b[i1]], "-", lw=2, color=(grey, grey, 1.0 - 0.5 * grey),
+                         label=f"$\\delta$ = {r['tube']:.3g}" if j == 0 else None)
+        ax2.set_aspect("equal", "datalim")
+        ax2.set_xlabel(f"{plane[0]} [m]"), ax2.set_ylabel(f"{plane[1]} [m]")
+        ax2.legend(fontsize=7)
+        ax2.set_title("reconstructed start poses", fontsize=9)
     fig.tight_layout()
     return _save(fig, path)
 

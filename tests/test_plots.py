@@ -101,6 +101,14 @@ def test_contact_forces_zmp_gain(tmp_path):
         plots.plot_gain_vs_tube([{"cost": 1.0}], tmp_path / "gain3.png")
 
 
+def test_plot_start_poses(arm, tmp_path):
+    model, _, Q = arm
+    rows = [{"tube": d, "translational_distance": 0.1 * k, "pose_distance": 0.15 * k, "q": Q[5 * k].tolist()}
+            for k, d in enumerate([1e-3, 1e-2, 1e-1])]
+    check_png(plots.plot_start_poses(rows, tmp_path / "sp.png", model=model), "start_poses")
+    check_png(plots.plot_start_poses(rows, tmp_path / "sp2.png"), "start_poses")
+
+
 def test_stick_segments_are_forward_kinematics(arm):
     model, _, Q = arm
     q = Q[len(Q) // 2]
