@@ -9,6 +9,7 @@ when that layer exists.
 """
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import asdict, dataclass
 
@@ -87,12 +88,17 @@ def initial_guess(js: JumpSetup, s: JumpSettings) -> dict:
     return {"P": js.init["P"], "phi_s": phi_s, "phi_l": phi_l, "flight": fb, "x_L": js.init["x_L"]}
 
 
-def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None) -> dict:
-    """Build and solve; returns {"result": {...}, "trajectory": {...}, "nlp": JumpNLP}."""
+def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np.ndarray | None = None) -> dict:
+    """Build and solve; returns {"result": {...}, "parts": {...}, "nlp": JumpNLP, "w": solution vector}.
+
+    ``x0`` (same settings' variable layout) replaces the training initial guess: a
+    continuation (warm start) from a smaller tube, whose optimum is feasible for a larger one.
+    """
     s = settings or JumpSettings()
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    warm = x0 is not None and np.size(x0) == nlp.x0.size
     t0 = time.perf_counter()
-    sol = nlp.solver(x0=nlp.x0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+    sol = nlp.solver(x0=x0 if warm else nlp.x0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
     solve_time = time.perf_counter() - t0
     stats = nlp.solver.stats()
     w = np.array(sol["x"]).ravel()
@@ -109,9 +115,9 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None) -> dic
         "objective": float(sol["f"]), "distance_initial": js.distance_training, "distance": distance,
         "performance_gain_pct": 100.0 * (distance - js.distance_training) / js.distance_training,
         "max_constraint_violation": float(viol.max()), "constraint_violation_by_kind": worst,
-        "settings": asdict(s),
+        "settings": asdict(s), "warm_start": bool(warm),
     }
-    return {"result": result, "parts": parts, "nlp": nlp, "settings": s}
+    return {"result": result, "parts": parts, "nlp": nlp, "settings": s, "w": w}
 
 
 # ------------------------------------------------------------------ trajectory export
@@ -205,6 +211,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
 
 # ------------------------------------------------------------------ solve layer glue
 _SETUP_CACHE: dict = {}
+_WARM: dict = {}  # (setup key, settings without tube) -> (delta, solution vector) of the last success
 
 
 def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSettings:
@@ -249,7 +256,11 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     s = settings_from_problem(problem, delta, hessian)
     s.n_control = int(key[2])
     s.print_level = 5 if verbose else 0
-    out = solve_broad_jump(js, s)
+    wkey = (key, json.dumps({k: v for k, v in asdict(s).items() if k not in ("tube", "print_level")}, sort_keys=True))
+    prev = _WARM.get(wkey)
+    out = solve_broad_jump(js, s, x0=prev[1] if prev is not None and prev[0] <= delta else None)
+    if out["result"]["success"]:
+        _WARM[wkey] = (delta, out["w"])
     traj = trajectory(js, out)
     checks = verify(js.model, traj, s.mu)
     r = out["result"]
