@@ -283,7 +283,7 @@ def _curves(name: str, t: np.ndarray, y: Mapping[str, np.ndarray] | np.ndarray,
     fig.supylabel(ylabel)
     if len(series) > 1 and axes:
         axes[0].legend(fontsize=7)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.07, top=0.95, wspace=0.3, hspace=0.35)
     return _save(fig, path)
 
 
@@ -318,7 +318,7 @@ def plot_contact_forces(t: np.ndarray, forces: np.ndarray, names: Sequence[str],
     ax2.set_ylabel("tangential $|f_{xy}|$ [N]")
     ax2.set_xlabel("t [s]")
     ax1.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.09, top=0.97, hspace=0.12)
     return _save(fig, path)
 
 
@@ -351,8 +351,15 @@ def plot_zmp_com(zmp: np.ndarray, com: np.ndarray, polygon: np.ndarray, path: st
     ax2.set_ylabel("x [m]")
     ax2.legend(fontsize=7)
     ax2.set_title("forward direction", fontsize=9)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.11, top=0.93, wspace=0.22)
     return _save(fig, path)
+
+
+def _log_x(ax: Any, x: np.ndarray) -> None:
+    """Log x axis; minor tick labels only when the data span less than a decade."""
+    ax.set_xscale("log")
+    if np.max(x) >= 10.0 * np.min(x):
+        ax.xaxis.set_minor_formatter(NullFormatter())
 
 
 def _row_value(row: Mapping[str, Any], keys: Sequence[str]) -> float:
@@ -408,8 +415,7 @@ def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
             ref = np.asarray(reference, dtype=float)
             ax.plot(ref[:, 0], ref[:, 1], "s--", color="C1", label="Kang & Park 2015")
         if np.all(x > 0):
-            ax.set_xscale("log")
-            ax.xaxis.set_minor_formatter(NullFormatter())
+            _log_x(ax, x)
         ax.legend(fontsize=8)
     if base:
         ax = axes[-1]
@@ -418,7 +424,7 @@ def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
         ax.legend(fontsize=8)
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.13, top=0.9 if title else 0.95, wspace=0.25)
     return _save(fig, path)
 
 
@@ -439,8 +445,7 @@ def plot_start_poses(rows: Sequence[Mapping[str, Any]], path: str | Path,
             label="translational distance [m] (Eq. 31)")
     ax.plot(d, [r["pose_distance"] for r in rows], "s-", color="C3", label="pose distance (Eq. 32)")
     if np.all(d > 0):
-        ax.set_xscale("log")
-        ax.xaxis.set_minor_formatter(NullFormatter())
+        _log_x(ax, d)
     ax.set_xlabel(r"tube size $\delta$")
     ax.set_ylabel("distance from the start pose")
     ax.grid(True, alpha=0.3)
@@ -459,7 +464,7 @@ def plot_start_poses(rows: Sequence[Mapping[str, Any]], path: str | Path,
         ax2.set_xlabel(f"{plane[0]} [m]"), ax2.set_ylabel(f"{plane[1]} [m]")
         ax2.legend(fontsize=7)
         ax2.set_title("reconstructed start poses", fontsize=9)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.11, top=0.93, wspace=0.25)
     return _save(fig, path)
 
 
@@ -537,7 +542,8 @@ def plot_stick_frames(model: pin.Model, Q: np.ndarray | Mapping[str, np.ndarray]
                 ax.set_title(label or None, fontsize=9)
             ax.set_ylim(*ylim)
             ax.set_aspect("equal", adjustable="datalim" if layout == "overlay" else "box")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.01 if layout == "panels" else 0.06, right=0.99, bottom=0.03 if layout == "panels" else 0.12,
+                        top=0.88 if rows == 1 else 0.93, wspace=0.05, hspace=0.3)
     return _save(fig, path)
 
 
