@@ -619,7 +619,8 @@ def _solution_gpdm(out_dir: Path, result: Mapping[str, Any]) -> Any:
         return None
 
 
-def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None = None) -> list[Path]:
+def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None = None,
+                  gif: bool = False) -> list[Path]:
     """Write the figures of a solved problem (``out_dir/result.json`` and
     ``trajectory.npz``) into ``out_dir/plots/`` and return their paths.
 
@@ -627,7 +628,8 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
     for a latent solution: the tube with the initial and optimised paths and
     control points (GPDM from ``gpdm.npz`` beside the result, else re-learned
     from the problem file, which is deterministic); for contact problems:
-    contact forces and ZMP/COM in the support polygon.
+    contact forces and ZMP/COM in the support polygon.  With ``gif`` also an
+    animation ``motion.gif`` of the optimised motion (:func:`latentoc.animation.animate`).
     """
     out_dir = Path(out_dir)
     result = json.loads((out_dir / "result.json").read_text())
@@ -699,4 +701,7 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
         delta = float(_pick(result, "tube", "delta"))
         written.append(plot_latent_tube(gpdm, delta, plot_dir / "latent_tube.png", paths=paths,
                                         control_points=ctrl, title=f"{title}: delta = {delta:.3g}"))
+    if gif:
+        from .animation import animate
+        written.append(animate(model, t, q, plot_dir / "motion.gif", fps=15, plane=plane, title=title))
     return written

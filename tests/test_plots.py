@@ -192,9 +192,11 @@ def test_plot_solution_contacts(tmp_path):
     write_solution(tmp_path, model, t, q, contact_forces=F, contact_frames=np.array(["foot_end"]),
                    zmp=np.column_stack([0.1 + 0 * t, 0 * t]), com=np.column_stack([0.1 + 0 * t, 0 * t, 0.8 + 0 * t]),
                    support_polygon=poly)
-    names = {p.name for p in plots.plot_solution(tmp_path)}
+    names = {p.name for p in plots.plot_solution(tmp_path, gif=True)}
     assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png",
-                     "zmp_com.png"}
+                     "zmp_com.png", "motion.gif"}
+    with Image.open(tmp_path / "plots" / "motion.gif") as im:
+        assert im.n_frames == 15 + 1  # 1 s at 15 fps, both ends
 
 
 def test_plot_solution_jump_format(tmp_path):
