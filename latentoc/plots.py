@@ -211,6 +211,9 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
     curves = _as_dict(paths, "path")
     ctrl = _as_dict(control_points, "control points")
     styles = ["-", "--", ":", "-."]
+    colour = {name: f"C{i}" for i, name in enumerate(curves)}
+    for j, name in enumerate(ctrl):  # control points take the colour of their path
+        colour[name] = next((colour[c] for c in curves if name.startswith(c)), f"C{len(curves) + j}")
     if d == 3:
         ax = fig.add_subplot(projection="3d")
         for T in gpdm.latent_trajectories():
@@ -221,9 +224,10 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
         X = gpdm.X
         ax.scatter(X[:, 0], X[:, 1], X[:, 2], s=1.5, c="k", label="training latent points")
         for i, (name, c) in enumerate(curves.items()):
-            ax.plot(c[:, 0], c[:, 1], c[:, 2], styles[i % 4], lw=2, label=name)
+            ax.plot(c[:, 0], c[:, 1], c[:, 2], styles[i % 4], color=colour[name], lw=2, label=name)
         for name, c in ctrl.items():
-            ax.scatter(c[:, 0], c[:, 1], c[:, 2], s=40, depthshade=False, label=name)
+            ax.scatter(c[:, 0], c[:, 1], c[:, 2], s=40, color=colour[name], edgecolors="k",
+                       depthshade=False, label=name)
         ax.set_xlabel("$x_1$"), ax.set_ylabel("$x_2$"), ax.set_zlabel("$x_3$")
         ext = np.ptp(np.vstack([X] + list(curves.values())), axis=0)
         ax.set_box_aspect(np.maximum(ext, 0.3 * ext.max()))  # near-equal scales
@@ -240,9 +244,9 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
         ax.contour(g1, g2, V, levels=[delta], colors=["goldenrod"], linewidths=1)
         ax.plot(gpdm.X[:, 0], gpdm.X[:, 1], "k.", ms=3, label="training latent points")
         for i, (name, c) in enumerate(curves.items()):
-            ax.plot(c[:, 0], c[:, 1], styles[i % 4], lw=2, label=name)
+            ax.plot(c[:, 0], c[:, 1], styles[i % 4], color=colour[name], lw=2, label=name)
         for name, c in ctrl.items():
-            ax.plot(c[:, 0], c[:, 1], "o", ms=7, label=name)
+            ax.plot(c[:, 0], c[:, 1], "o", color=colour[name], mec="k", ms=7, label=name)
         ax.set_xlabel("$x_1$"), ax.set_ylabel("$x_2$"), ax.set_aspect("equal", "datalim")
     else:
         raise ValueError(f"latent_dim must be 2 or 3, got {d}")
