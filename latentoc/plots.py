@@ -216,18 +216,20 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
         colour[name] = next((colour[c] for c in curves if name.startswith(c)), f"C{len(curves) + j}")
     if d == 3:
         ax = fig.add_subplot(projection="3d")
+        ax.computed_zorder = False  # draw paths and points over the translucent tube
         for T in gpdm.latent_trajectories():
             P, ok = tube_mesh(gpdm, delta, centre=T)
             P = np.concatenate([P, P[:, :1]], axis=1)  # close the tube around
             ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], color="gold", alpha=0.35,
-                            linewidth=0, shade=True)
+                            linewidth=0, shade=True, zorder=1)
         X = gpdm.X
-        ax.scatter(X[:, 0], X[:, 1], X[:, 2], s=1.5, c="k", label="training latent points")
+        ax.scatter(X[:, 0], X[:, 1], X[:, 2], s=1.5, c="k", label="training latent points", zorder=2)
         for i, (name, c) in enumerate(curves.items()):
-            ax.plot(c[:, 0], c[:, 1], c[:, 2], styles[i % 4], color=colour[name], lw=2, label=name)
+            ax.plot(c[:, 0], c[:, 1], c[:, 2], styles[i % 4], color=colour[name], lw=2, label=name,
+                    zorder=3)
         for name, c in ctrl.items():
             ax.scatter(c[:, 0], c[:, 1], c[:, 2], s=40, color=colour[name], edgecolors="k",
-                       depthshade=False, label=name)
+                       depthshade=False, label=name, zorder=4)
         ax.set_xlabel("$x_1$"), ax.set_ylabel("$x_2$"), ax.set_zlabel("$x_3$")
         ext = np.ptp(np.vstack([X] + list(curves.values())), axis=0)
         ax.set_box_aspect(np.maximum(ext, 0.3 * ext.max()))  # near-equal scales
