@@ -50,6 +50,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>)")
     s.add_argument("--quiet", action="store_true", help="no Ipopt iteration log")
     s.add_argument("--keep-failed", action="store_true", help="write files even if Ipopt did not succeed")
+    s.add_argument("--plots", action="store_true", help="also write PNG figures (and motion.gif) to OUT/plots")
 
     sub.add_parser("list", help="list the packaged problems")
 
@@ -61,6 +62,7 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--latent-dim", type=int, default=None)
     w.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
     w.add_argument("--out", type=Path, default=None)
+    w.add_argument("--plots", action="store_true", help="also write OUT/gain_vs_tube.png")
 
     sp = sub.add_parser("start-poses", help="end-effector distances of new start poses vs tube (Sect. 4.1.4)")
     sp.add_argument("problem")
@@ -106,6 +108,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path("out") / f"{r['problem']}-{r['method']}"
     paths = write_solution(sol, out)
     print("  wrote " + ", ".join(str(p) for p in paths))
+    if args.plots:
+        from .plots import plot_solution
+
+        figures = plot_solution(out, gif=True)
+        print(f"  plots: {len(figures)} figures in {out / 'plots'}")
     return 0 if sol.success else 1
 
 
@@ -128,6 +135,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "latent_dim": args.latent_dim}
         paths = write_sweep(rows, args.out, meta)
         print("wrote " + ", ".join(str(p) for p in paths))
+    if args.plots:
+        from .plots import plot_gain_vs_tube
+
+        out = args.out if args.out is not None else Path("out") / f"{problem.name}-sweep"
+        print("wrote " + str(plot_gain_vs_tube(rows, out / "gain_vs_tube.png", title=f"{problem.name}: gain vs tube")))
     return 0
 
 

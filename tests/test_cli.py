@@ -64,3 +64,19 @@ def test_unconverged_solve_exits_1_and_writes_only_with_keep_failed(tmp_path, ca
     assert main(["solve", str(f), "--quiet", "--keep-failed", "--out", str(out)]) == 1
     assert sorted(p.name for p in out.iterdir()) == ["result.json", "trajectory.npz"]
     assert json.loads((out / "result.json").read_text())["success"] is False
+
+
+def test_solve_plots_writes_png_figures_of_the_solution(tmp_path, capsys):
+    from PIL import Image
+
+
+    out = tmp_path / "arm"
+    assert main(["solve", "arm-raise-small", "--quiet", "--out", str(out), "--plots"]) == 0
+    pngs = sorted((out / "plots").glob("*.png"))
+    assert {"joint_angles.png", "torques.png", "latent_tube.png", "stick_frames.png"} <= {p.name for p in pngs}
+    for png in pngs:
+        with Image.open(png) as im:
+            assert im.size[0] > 200 and im.size[1] > 200
+    with Image.open(out / "plots" / "motion.gif") as gif:
+        assert gif.n_frames > 10
+    assert "plots: " in capsys.readouterr().out
