@@ -38,7 +38,8 @@ Status and known limits (measured, issue 6 report):
   residuals of several body weights between the landing nodes (the latent path runs
   fast through regions where the GPDM mean bends), so the node count or an
   inter-node (e.g. collocation-interval) constraint must grow before the numbers can be
-  trusted;
+  trusted (tube 0.5: nodes 10/9/14 give 0.862 m with a 1 kHz residual of 10.6 body
+  weights; nodes 20/15/40 give 0.470 m with 0.42 body weights and friction ratio 0.53);
 * solves take minutes with L-BFGS (target 20 s): the Jacobian of the 62-DOF RNEA through
   the GPDM mean's second derivatives costs ~0.4 s per evaluation.
 """
