@@ -91,7 +91,7 @@ PROBLEM_KINDS: set[str] = {"latent-min-torque", "broad-jump"}
 
 _GPDM_KEYS = {"balanced": bool, "outer_iterations": int, "max_iterations": int, "init": str,
               "seed": int, "kappa_sq": float, "log_hyper_bound": float, "gtol": float,
-              "training_stride": int}
+              "training_stride": int, "beta3_max": float}
 
 
 @dataclass

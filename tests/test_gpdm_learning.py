@@ -175,3 +175,16 @@ def test_roughness_reference_values():
     assert roughness(circ) == pytest.approx(2 * np.sin(np.pi / 60), rel=1e-9)
     noise = np.random.default_rng(0).standard_normal((20000, 3))
     assert 1.5 < roughness(noise) < 1.9
+
+
+def test_beta3_max_bounds_the_noise_and_defaults_off(motion):
+    """beta3_max (default None) caps beta_3, i.e. floors the noise variance at 1/beta3_max."""
+    Y, settings, model = motion
+    assert GPDMSettings().beta3_max is None
+    assert model.beta[2] > 20.0  # unbounded: beta_3 ~ 41 on this motion
+    bounded = learn_gpdm(Y, GPDMSettings(latent_dim=3, beta3_max=10.0))
+    assert bounded.beta[2] <= 10.0 * (1 + 1e-9)
+    assert bounded.noise_variance >= 0.1 * (1 - 1e-9)
+    assert GPDMSettings.from_json(bounded.settings.to_json()) == bounded.settings
+    with pytest.raises(GPDMInputError, match="beta3_max"):
+        learn_gpdm(Y, GPDMSettings(latent_dim=3, beta3_max=-1.0))

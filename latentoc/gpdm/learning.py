@@ -81,6 +81,9 @@ class GPDMSettings:
     alpha0: tuple[float, ...] = (0.9, 1.0, 0.1, float(np.e))
     beta0: tuple[float, ...] = (1.0, 1.0, float(np.e))
     log_hyper_bound: float = 18.0  # |ln alpha_i|, |ln beta_i| <= this
+    # Optional upper bound on beta_3, i.e. a floor 1/beta3_max on the observation noise
+    # variance (W-scaled units).  None (default): only log_hyper_bound applies.
+    beta3_max: float | None = None
     gtol: float = 1e-6
     blas_threads: int | None = 1  # BLAS threads during learning (None: leave as is)
 
@@ -108,6 +111,8 @@ def _check_settings(settings: GPDMSettings) -> None:
     if len(settings.alpha0) != 4 or len(settings.beta0) != 3 or min(settings.alpha0) <= 0 \
             or min(settings.beta0) <= 0:
         raise GPDMInputError("settings.alpha0 must be 4 positive numbers and settings.beta0 3 positive numbers")
+    if settings.beta3_max is not None and not settings.beta3_max > 0:
+        raise GPDMInputError(f"settings.beta3_max must be positive or None, got {settings.beta3_max!r}")
 
 
 def prepare_data(Y: np.ndarray | Sequence[np.ndarray], latent_dim: int) -> tuple[np.ndarray, list[int]]:
@@ -252,6 +257,9 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     v = pack(X, alpha, beta)
     b = float(settings.log_hyper_bound)
     bounds = [(None, None)] * (N * d) + [(-b, b)] * 7
+    if settings.beta3_max is not None:
+        bounds[-1] = (-b, min(b, float(np.log(settings.beta3_max))))
+        v[-1] = np.clip(v[-1], *bounds[-1])
     t0 = time.perf_counter()
     f = np.nan
     with _blas_threads(settings.blas_threads):
