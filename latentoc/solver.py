@@ -34,15 +34,24 @@ class NLPResult:
 
 def build_solver(nlp: dict, *, hessian: str = "exact", max_iter: int = 300, tol: float = 1e-8,
                  verbose: bool = False, name: str = "solver", expand: bool = False) -> ca.Function:
-    """An Ipopt ``casadi.Function`` for ``nlp = {"x", "f", "g"}``."""
+    """An Ipopt ``casadi.Function`` for ``nlp = {"x", "f", "g"}``.
+
+    ``nlp`` may also hold ``"derivatives"``: custom ``grad_f``, ``jac_g`` and ``hess_lag``
+    Functions (e.g. :func:`latentoc.transcription.build_latent_nlp`'s lifted ones), passed
+    to ``nlpsol`` in place of the generated ones (``hess_lag`` only with the exact Hessian).
+    """
     if hessian not in HESSIANS:
         raise ValueError(f"hessian must be one of {HESSIANS}, got {hessian!r}")
+    nlp = dict(nlp)
+    derivatives = dict(nlp.pop("derivatives", None) or {})
+    if hessian != "exact":
+        derivatives.pop("hess_lag", None)
     ipopt = {"max_iter": int(max_iter), "tol": float(tol), "print_level": 5 if verbose else 0,
              "sb": "yes", "mu_strategy": "adaptive", "acceptable_tol": max(1e-6, 100 * float(tol)),
              "acceptable_iter": 10}
     if hessian == "lbfgs":
         ipopt["hessian_approximation"] = "limited-memory"
-    options = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "expand": bool(expand)}
+    options = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "expand": bool(expand), **derivatives}
     return ca.nlpsol(name, "ipopt", nlp, options)
 
 

@@ -33,3 +33,36 @@ def test_iteration_limit_reports_failure():
 def test_bad_hessian_name():
     with pytest.raises(ValueError, match="hessian"):
         build_solver(_nlp(), hessian="newton")
+
+
+@pytest.mark.parametrize("hessian", ["exact", "lbfgs"])
+def test_custom_derivatives_are_used(hessian):
+    """nlp["derivatives"] replaces nlpsol's generated grad_f / jac_g / hess_lag: a hess_lag
+    counting its calls is called with the exact Hessian and dropped with L-BFGS."""
+    nlp = _nlp()
+    x, f, g = nlp["x"], nlp["f"], nlp["g"]
+    p, lf, lg = ca.MX.sym("p", 0), ca.MX.sym("lf"), ca.MX.sym("lg")
+    calls = []
+
+    class Counter(ca.Callback):
+        def __init__(self):
+            ca.Callback.__init__(self)
+            self.construct("counter", {})
+
+        def eval(self, arg):
+            calls.append(1)
+            return [arg[0]]
+
+    counter = Counter()
+    hess = ca.triu(ca.hessian(lf * f + lg * g, x)[0])
+    nlp["derivatives"] = {
+        "grad_f": ca.Function("grad_f", [x, p], [f, ca.gradient(f, x)], ["x", "p"], ["f", "grad_f_x"]),
+        "jac_g": ca.Function("jac_g", [x, p], [g, ca.jacobian(g, x)], ["x", "p"], ["g", "jac_g_x"]),
+        "hess_lag": ca.Function("hess_lag", [x, p, lf, lg], [ca.substitute(hess, lf, counter(lf))],
+                                ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
+    }
+    s = build_solver(nlp, hessian=hessian, max_iter=500)
+    r = solve_nlp(s, np.array([-1.0, 1.0]), -np.inf * np.ones(2), np.inf * np.ones(2), [-np.inf], [1.0])
+    assert r.success and np.allclose(r.x, [0.78641515, 0.61769831], atol=1e-4)
+    assert (len(calls) > 0) == (hessian == "exact")
+    assert "derivatives" in nlp  # the caller's dict is not modified

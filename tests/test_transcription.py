@@ -57,3 +57,37 @@ def test_constraint_rows_are_sigma2_and_q(setup):
     assert np.allclose(g[:K], gp.variance(x), rtol=1e-8)
     assert np.allclose(g[K:].reshape(K, 7), gp.mean(x), atol=1e-10)
     assert np.all(nlp.ubg[:K] == 0.05) and nlp.w0.size == 3 * 3
+
+
+def test_lifted_derivatives_match_automatic_ones(setup):
+    """The structured grad_f, jac_g and hess_lag (lifted to the quadrature/grid nodes) equal
+    CasADi's derivatives of the plain NLP expressions."""
+    p, gp, t, sym = setup
+    st = TranscriptionSettings(duration=2.9, control_points=7, quadrature_points=4, constraint_points=6)
+    nlp = build_latent_nlp(gp, sym, st, 0.05, t)
+    der = nlp.nlp["derivatives"]
+    assert der is nlp.derivatives and set(der) == {"grad_f", "jac_g", "hess_lag"}
+    w, f, g = nlp.nlp["x"], nlp.nlp["f"], nlp.nlp["g"]
+    rng = np.random.default_rng(1)
+    w0 = nlp.w0 + 0.05 * rng.standard_normal(nlp.w0.size)
+    lam_f, lam_g = 0.7, rng.standard_normal(g.shape[0])
+    lg = ca.MX.sym("lg", g.shape[0])
+    lf = ca.MX.sym("lf")
+    ref = ca.Function("ref", [w, lf, lg], [f, ca.gradient(f, w), g, ca.jacobian(g, w),
+                                          ca.hessian(lf * f + ca.dot(lg, g), w)[0]])
+    f_r, gf_r, g_r, jg_r, h_r = (np.asarray(ca.DM(v)) for v in ref(w0, lam_f, lam_g))
+    f_c, gf_c = der["grad_f"](w0, [])
+    g_c, jg_c = der["jac_g"](w0, [])
+    h_c = np.asarray(ca.DM(der["hess_lag"](w0, [], lam_f, lam_g)))
+    assert np.isclose(float(f_c), f_r.item(), rtol=1e-12)
+    assert np.allclose(np.asarray(gf_c), gf_r, rtol=1e-9, atol=1e-9 * np.abs(gf_r).max())
+    assert np.allclose(np.asarray(g_c), g_r, rtol=1e-10, atol=1e-12)
+    assert np.allclose(np.asarray(ca.DM(jg_c)), jg_r, rtol=1e-9, atol=1e-9 * np.abs(jg_r).max())
+    assert np.allclose(h_c, np.triu(h_r), rtol=1e-8, atol=1e-8 * np.abs(h_r).max())
+
+
+def test_torque_limits_fall_back_to_automatic_derivatives(setup):
+    p, gp, t, sym = setup
+    st = TranscriptionSettings(duration=2.9, control_points=7, torque_limits=[50.0])
+    nlp = build_latent_nlp(gp, sym, st, 0.05, t)
+    assert nlp.derivatives is None and "derivatives" not in nlp.nlp
