@@ -646,8 +646,11 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
     t, q = traj["t"], traj["q"]
     q0 = _pick(traj, "q_initial", "q0", "initial_q")
     tau, tau0 = traj.get("tau"), _pick(traj, "tau_initial", "tau0", "initial_tau")
-    if tau0 is None and q0 is not None and model.nq == model.nv and len(t) > 2:
+    same_grid = q0 is not None and len(q0) == len(t)  # an initial motion may have its own rate
+    if tau0 is None and same_grid and model.nq == model.nv and len(t) > 2:
         tau0 = _inverse_dynamics(model, t, q0)
+    if tau0 is not None and len(tau0) != len(t):
+        tau0 = None
     names, iq, iv = _actuated(model, max_joints, q)
     floating = model.njoints > 1 and model.joints[1].nq == 7
     plane = plane or ("xz" if floating else "yz")
@@ -655,7 +658,7 @@ def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None =
     written: list[Path] = []
 
     qs = {"optimised": q[:, iq]}
-    if q0 is not None:
+    if same_grid:
         qs = {"initial": q0[:, iq], **qs}
     written.append(plot_joint_curves(t, qs, names, plot_dir / "joint_angles.png"))
     if tau is not None:

@@ -214,11 +214,13 @@ def test_plot_solution_jump_format(tmp_path):
             "tau": np.zeros((n, model.nv - 6)), "wrench": wrench, "contact": np.ones(n, np.int8),
             "contact_frames": np.array(["ltoes_end", "rtoes_end"]), "touchdown": np.float64(t[n // 2]),
             "heel_offset": np.array([-0.05, 0.0, 0.0]), "tau_min": -np.ones(model.nv - 6),
-            "tau_max": np.ones(model.nv - 6), "model": np.str_(model.saveToString())}
+            "tau_max": np.ones(model.nv - 6), "model": np.str_(model.saveToString()),
+            "q_initial": Qj}  # the training jump at its own frame rate: stick frames only
     np.savez(tmp_path / "trajectory.npz", **traj)
     (tmp_path / "result.json").write_text(json.dumps({"problem": "broad-jump", "kind": "broad-jump"}))
-    names = {p.name for p in plots.plot_solution(tmp_path)}
-    assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png", "zmp_com.png"}
+    paths = {p.name: p for p in plots.plot_solution(tmp_path)}
+    assert set(paths) == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png", "zmp_com.png"}
+    check_png(paths["stick_frames.png"], "stick_frames", rows=2)
     zmp, com, poly, tz = plots._landing_balance(model, traj)
     assert len(zmp) == len(com) == len(tz) == np.sum(t >= t[n // 2])
     assert np.allclose(zmp, com[:, :2], atol=1e-9)  # static: ZMP = ground projection of the COM
