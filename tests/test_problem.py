@@ -37,7 +37,7 @@ def test_unknown_name_lists_known():
     (('training = "human-arm-trial"', 'training = "dance"'), "unknown training motion 'dance'"),
     (('hessian = "exact"', 'hessian = "bfgs"'), "solver.hessian"),
     (("control_points = 7", "control_points = 3"), "fewer than spline_degree"),
-    (('tube = "50x"', "tube = -1.0"), "latent.tube"),
+    (('tube = "5x"', "tube = -1.0"), "latent.tube"),
     (("[gpdm]", "[gpdm]\nfoo = 2"), "unknown key gpdm.foo"),
     (("[gpdm]", "[extras]\na = 1\n[gpdm]"), r"unknown table \[extras\]"),
 ])
