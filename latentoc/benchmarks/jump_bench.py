@@ -20,6 +20,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tubes", type=float, nargs="+", default=[1.0])
     ap.add_argument("--quick", action="store_true", help="small node count (6/6/8), no torque/polygon/complementarity")
     ap.add_argument("--max-iter", type=int, default=400)
+    ap.add_argument("--one-phase", action="store_true", help="skip the phase-1 feasibility solve")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     js = setup()
@@ -27,13 +28,17 @@ def main(argv: list[str] | None = None) -> int:
     for tube in args.tubes:
         if args.quick:
             s = JumpSettings(tube=tube, n_stance=6, n_flight=6, n_land=8, torque_limits=False, polygon=False,
-                             complementarity=False, max_iter=args.max_iter)
+                             complementarity=False, max_iter=args.max_iter, two_phase=not args.one_phase)
         else:
-            s = JumpSettings(tube=tube, max_iter=args.max_iter)
+            s = JumpSettings(tube=tube, max_iter=args.max_iter, two_phase=not args.one_phase)
+        c0 = time.process_time()
         r = solve_broad_jump(js, s)["result"]
-        print(f"tube {tube:g}: build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s, "
-              f"{r['iterations']} iterations, {r['status']}, distance {r['distance']:.3f} m "
-              f"(training {r['distance_initial']:.3f} m)")
+        p1 = r.get("phase1") or {}
+        ph1 = (f"phase 1 {p1['iterations']} it {p1['time_s']:.1f} s {p1['status']} viol {p1['max_constraint_violation']:.1e}; "
+               if p1 else "")
+        print(f"tube {tube:g}: build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s wall "
+              f"({time.process_time() - c0:.1f} s CPU incl. build), {ph1}phase 2 {r['iterations']} it, {r['status']}, "
+              f"distance {r['distance']:.3f} m (training {r['distance_initial']:.3f} m)", flush=True)
     return 0
 
 

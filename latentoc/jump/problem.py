@@ -88,6 +88,56 @@ def initial_guess(js: JumpSetup, s: JumpSettings) -> dict:
     return {"P": js.init["P"], "phi_s": phi_s, "phi_l": phi_l, "flight": fb, "x_L": js.init["x_L"]}
 
 
+def consistent_start(nlp, x0: np.ndarray) -> np.ndarray:
+    """Make the training initial guess consistent with the NLP's equality constraints.
+
+    The GPDM-mean motion with the anchored base is not the captured one, so the raw guess
+    violates the base rows by up to ~25 body weights (measured, nodes 10/9/14) and the
+    takeoff velocity by ~12 (rad/s).  Two cheap, linear repairs:
+
+    * flight base: add a cubic Hermite correction so that it starts at the stance base's
+      takeoff position and velocity and ends at the landing base's touchdown position;
+    * contact forces: per contact node, the generator weights lam >= 0 that best match the
+      node's sagittal base rows (non-negative least squares; the rows are affine in lam).
+    """
+    from scipy.optimize import nnls
+
+    g_fun, sizes, names = nlp.meta["g_fun"], nlp.meta["sizes"], np.array(nlp.names)
+    spf = nlp.meta["splines"][3]
+    x = np.array(x0, float).copy()
+
+    def g(v):
+        return np.array(g_fun(v)).ravel()
+
+    g0 = g(x)
+    r0, rv, rt = g0[names == "takeoff_position"], g0[names == "takeoff_velocity"], g0[names == "touchdown_position"]
+    T = spf.duration
+    tt = np.linspace(0.0, T, 200)
+    sx = tt / T
+    h00, h10, h01 = 2 * sx**3 - 3 * sx**2 + 1, (sx**3 - 2 * sx**2 + sx) * T, -2 * sx**3 + 3 * sx**2
+    corr = -(np.outer(h00, r0) + np.outer(h10, rv) + np.outer(h01, rt))
+    a, b = sizes["flight"]
+    C = x[a:b].reshape(-1, 3, order="F") + spf.fit(tt, corr, fix_ends=False)
+    x[a:b] = C.ravel(order="F")
+    # contact forces: dynamics rows = c + A lam, node by node (3 rows, 6 generators)
+    a, b = sizes["lam"]
+    x[a:b] = 0.0
+    dyn = names == "dynamics"
+    c = g(x)[dyn].reshape(-1, 3)
+    nS, nF = len(nlp.meta["grid"]["stance"]), len(nlp.meta["grid"]["flight"])
+    cols = list(range(nS)) + list(range(nS + nF, c.shape[0]))
+    A = np.zeros((c.shape[0], 3, 6))
+    for k in range(6):
+        xk = x.copy()
+        xk[a + k:b:6] = 1.0
+        A[:, :, k] = g(xk)[dyn].reshape(-1, 3) - c
+    lam = np.zeros((6, len(cols)))
+    for j, col in enumerate(cols):
+        lam[:, j] = nnls(A[col], -c[col])[0]
+    x[a:b] = lam.ravel(order="F")
+    return x
+
+
 def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np.ndarray | None = None) -> dict:
     """Build and solve; returns {"result": {...}, "parts": {...}, "nlp": JumpNLP, "w": solution vector}.
 
@@ -98,9 +148,24 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     warm = x0 is not None and np.size(x0) == nlp.x0.size
     t0 = time.perf_counter()
-    sol = nlp.solver(x0=x0 if warm else nlp.x0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+    phase1 = {}
+    start = x0 if warm else (consistent_start(nlp, nlp.x0) if s.two_phase else nlp.x0)
+    if not warm and s.two_phase:
+        # phase 1: a feasible point (all hard constraints) closest to the training fit
+        sol1 = nlp.solver(x0=start, p=0.0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+        st1 = nlp.solver.stats()
+        g1 = np.array(sol1["g"]).ravel()
+        v1 = np.maximum(nlp.lbg - g1, 0) + np.maximum(g1 - nlp.ubg, 0)
+        w1 = np.array(sol1["x"]).ravel()
+        phase1 = {"status": st1["return_status"], "success": bool(st1["success"]), "iterations": int(st1["iter_count"]),
+                  "time_s": time.perf_counter() - t0, "max_constraint_violation": float(v1.max()),
+                  "distance": float(np.array(nlp.unpack(w1)[4]).ravel()[0])}
+        start = w1
+    t1 = time.perf_counter()
+    sol = nlp.solver(x0=start, p=1.0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
     solve_time = time.perf_counter() - t0
     stats = nlp.solver.stats()
+    phase2_time = time.perf_counter() - t1
     w = np.array(sol["x"]).ravel()
     g = np.array(sol["g"]).ravel()
     viol = np.maximum(nlp.lbg - g, 0) + np.maximum(g - nlp.ubg, 0)
@@ -116,6 +181,7 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
         "performance_gain_pct": 100.0 * (distance - js.distance_training) / js.distance_training,
         "max_constraint_violation": float(viol.max()), "constraint_violation_by_kind": worst,
         "settings": asdict(s), "warm_start": bool(warm),
+        "phase1": phase1, "phase2_time_s": phase2_time,
     }
     return {"result": result, "parts": parts, "nlp": nlp, "settings": s, "w": w}
 
@@ -223,7 +289,8 @@ def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSett
                         n_land=int(o.get("n_land", 14)), max_iter=int(problem.max_iter), tol=float(problem.tol),
                         hessian="limited-memory" if h in ("lbfgs", "limited-memory") else "exact",
                         torque_limits=bool(o.get("torque_limits", True)), polygon=bool(o.get("polygon", True)),
-                        complementarity=bool(o.get("complementarity", True)))
+                        complementarity=bool(o.get("complementarity", True)),
+                        two_phase=bool(o.get("two_phase", True)))
 
 
 def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=None, hessian=None,

@@ -86,6 +86,7 @@ class JumpSettings:
     torque_limits: bool = True
     complementarity: bool = True
     polygon: bool = True
+    two_phase: bool = True  # phase 1 feasibility near the training fit, then phase 2 max distance
 
 
 @dataclass
@@ -259,7 +260,12 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
 
     G_ = ca.vertcat(*g)
     x0_pin = 0.0
-    f = -(xL - x0_pin) + 1e-4 * ca.sumsqr(Lam) + 1e-4 * ca.sumsqr(Limp)  # tiny force regularisation
+    # objective weight p: p = 1 maximises the distance (Eq. 33, phase 2); p = 0 is phase 1, the
+    # feasibility problem: the point satisfying every hard constraint closest to the initial fit
+    # of the training path (squared deviation of the free latent control points)
+    pw = ca.MX.sym("p_distance")
+    dev = ca.sumsqr(Pfree - ca.DM(Pfix[1:-1])) / max(float(np.mean(np.square(Pfix))), 1e-12)
+    f = pw * (-(xL - x0_pin)) + (1 - pw) * dev + 1e-4 * ca.sumsqr(Lam) + 1e-4 * ca.sumsqr(Limp)  # tiny force regularisation
 
     # bounds and initial guess
     lbx = -np.inf * np.ones(w.numel())
@@ -281,7 +287,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     x0[slice(*sizes["lam"])] = init.get("lam", np.full(6 * n_contact, 1.0 / 12.0))
     x0[slice(*sizes["lam_impact"])] = 0.5
 
-    nlp = {"x": w, "f": f, "g": G_}
+    nlp = {"x": w, "p": pw, "f": f, "g": G_}
     opts = {"ipopt.max_iter": s.max_iter, "ipopt.tol": s.tol, "ipopt.print_level": s.print_level,
             "print_time": False, "ipopt.hessian_approximation": s.hessian,
             "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 10,
@@ -291,4 +297,5 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
                          ["w"], ["P", "phi_s", "phi_l", "flight", "x_L", "lam", "lam_impact"])
     build = time.perf_counter() - t0
     return JumpNLP(solver, x0, lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), unpack, names, build,
-                   {"grid": grid, "splines": (sp, sps, spl, spf), "mass": mass})
+                   {"grid": grid, "splines": (sp, sps, spl, spf), "mass": mass,
+                    "g_fun": ca.Function("g", [w], [G_]), "sizes": sizes})

@@ -1,0 +1,23 @@
+"""The phase-1 start: training guess made consistent with the NLP's linear equalities."""
+import numpy as np
+
+from latentoc.jump.problem import consistent_start, initial_guess, setup
+from latentoc.jump.transcription import JumpSettings, build_nlp
+
+
+def test_consistent_start_repairs_continuity_and_forces():
+    js = setup()
+    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    names = np.array(nlp.names)
+    x = consistent_start(nlp, nlp.x0)
+    g0, g1 = (np.array(nlp.meta["g_fun"](v)).ravel() for v in (nlp.x0, x))
+    for kind in ("takeoff_position", "takeoff_velocity", "touchdown_position"):
+        assert np.abs(g1[names == kind]).max() < 1e-9 < np.abs(g0[names == kind]).max()
+    a, b = nlp.meta["sizes"]["lam"]
+    assert np.all(x[a:b] >= 0)
+    # stance/landing force residual no worse than the uniform guess at every contact node
+    d0, d1 = (np.abs(g[names == "dynamics"]).reshape(-1, 3) for g in (g0, g1))
+    nS, nF = 5, 5
+    contact = list(range(nS)) + list(range(nS + nF, d0.shape[0]))
+    assert np.all(np.linalg.norm(d1[contact], axis=1) <= np.linalg.norm(d0[contact], axis=1) + 1e-9)
