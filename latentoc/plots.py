@@ -217,8 +217,10 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
     if d == 3:
         ax = fig.add_subplot(projection="3d")
         ax.computed_zorder = False  # draw paths and points over the translucent tube
+        shown = [gpdm.X] + list(curves.values()) + list(ctrl.values())
         for T in gpdm.latent_trajectories():
             P, ok = tube_mesh(gpdm, delta, centre=T)
+            shown.append(P[ok])
             P = np.concatenate([P, P[:, :1]], axis=1)  # close the tube around
             ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], color="gold", alpha=0.35,
                             linewidth=0, shade=True, zorder=1)
@@ -231,7 +233,10 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
             ax.scatter(c[:, 0], c[:, 1], c[:, 2], s=40, color=colour[name], edgecolors="k",
                        depthshade=False, label=name, zorder=4)
         ax.set_xlabel("$x_1$"), ax.set_ylabel("$x_2$"), ax.set_zlabel("$x_3$")
-        ext = np.ptp(np.vstack([X] + list(curves.values())), axis=0)
+        allp = np.vstack(shown)
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        ext = np.maximum(hi - lo, 1e-9)
+        ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
         ax.set_box_aspect(np.maximum(ext, 0.3 * ext.max()))  # near-equal scales
     elif d == 2:
         ax = fig.add_subplot()
