@@ -42,6 +42,25 @@ Status and known limits (measured, issue 6 report):
   weights; nodes 20/15/40 give 0.470 m with 0.42 body weights and friction ratio 0.53);
 * solves take minutes with L-BFGS (target 20 s): the Jacobian of the 62-DOF RNEA through
   the GPDM mean's second derivatives costs ~0.4 s per evaluation.
+
+Two-phase solve (``JumpSettings.two_phase``; parameter ``p`` of the NLP weights the
+objective: p = 0 phase 1, the squared deviation of the free latent control points from the
+training fit, p = 1 phase 2, the distance), measured 2026-11-23 on 2 loaded cores, nodes
+10/9/14, L-BFGS, torque_margin 0.1 unless stated, all hard constraints on:
+
+* the training guess violates the base rows by up to 25 body weights at the nodes (takeoff
+  and touchdown nodes; the GPDM-mean motion with the toe-pinned base is not the captured
+  motion) and the takeoff velocity by 12; :func:`latentoc.jump.problem.consistent_start`
+  repairs the continuity rows exactly and fits the node forces by NNLS, but the base rows
+  stay at up to 24 body weights (the needed forces leave the friction cone / pull);
+* tube 0.02, raw start: phase 1 stops at 400 iterations with violation 0.25, phase 2 then
+  "infeasible problem detected" (violation 0.055, takeoff position; tube 0.0033 over);
+* tube 0.1 / 0.5 with the consistent start: phase 1 at 372 / 400 iterations still at
+  primal infeasibility 0.07 / 0.013 (0.5 ends in restoration);
+* at the tube-0.02 end point above the torque (margin 0.1) and polygon rows hold at the nodes;
+  the violated ones are the tube, takeoff continuity and the heel/ball complementarity, so
+  widening the torque limits alone (margin 0.3 tried, tube 0.02: inf_pr still 12 after 43
+  iterations, stopped) does not make the problem feasible.
 """
 from __future__ import annotations
 
