@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from mocap_fuzz import MUTATIONS, mutate
 
 from latentoc.mocap import MocapFormatError, parse_amc, read_amc, read_asf
 
@@ -78,24 +79,9 @@ _token = st.one_of(st.sampled_from(["nan", "inf", "-1e999", "root", "lfemur", "l
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(i=st.integers(0, len(SHORT) - 1), op=st.sampled_from(["replace", "delete", "dup", "tok", "ins"]),
-       tok=_token, j=st.integers(0, 7))
+@given(i=st.integers(0, len(SHORT) - 1), op=st.sampled_from(MUTATIONS), tok=_token, j=st.integers(0, 7))
 def test_fuzz_mutated_lines(i, op, tok, j):
-    lines = list(SHORT)
-    if op == "replace":
-        lines[i] = tok
-    elif op == "delete":
-        del lines[i]
-    elif op == "dup":
-        lines.insert(i, lines[i])
-    elif op == "ins":
-        lines.insert(i, tok)
-    else:
-        t = lines[i].split()
-        if t:
-            t[j % len(t)] = tok
-        lines[i] = " ".join(t)
-    _check("\r\n".join(lines))
+    _check(mutate(SHORT, i, op, tok, j))
 
 
 @settings(max_examples=100, deadline=None)
