@@ -60,7 +60,17 @@ training fit, p = 1 phase 2, the distance), measured 2026-11-23 on 2 loaded core
 * at the tube-0.02 end point above the torque (margin 0.1) and polygon rows hold at the nodes;
   the violated ones are the tube, takeoff continuity and the heel/ball complementarity, so
   widening the torque limits alone (margin 0.3 tried, tube 0.02: inf_pr still 12 after 43
-  iterations, stopped) does not make the problem feasible.
+  iterations, stopped) does not make the problem feasible;
+* with the three switches off (tube 0.02): phase 1 converges (262 iterations, violation
+  5e-9) to a point whose jump is only 0.153 m, phase 2 (117 iterations) reaches 0.432 m
+  (one-phase: 0.450 m, 212 iterations); 430 s wall, 177 s CPU on the loaded machine; the
+  1 kHz check is as bad as before (base residual 5.5 body weights, friction ratio 62);
+* why the nearest feasible point jumps so short: the initial guess's toe-pinned stance
+  base leaves with (xd, zd, pitch rate) = (12.1, -3.8, 11.8) at takeoff (the 5-point foot
+  pitch spline phi_s fitted to the heel rise ends steeply), against (1.07, 1.41, -0.32)
+  of the captured flight; the takeoff state, not the torque limits, is what is far from
+  consistent.  Next: fit phi_s (and the latent end) to the captured takeoff velocity, or
+  more phi_s points, before phase 1.
 """
 from __future__ import annotations
 
