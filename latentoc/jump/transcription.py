@@ -69,8 +69,10 @@ training fit, p = 1 phase 2, the distance), measured 2026-11-23 on 2 loaded core
   base leaves with (xd, zd, pitch rate) = (12.1, -3.8, 11.8) at takeoff (the 5-point foot
   pitch spline phi_s fitted to the heel rise ends steeply), against (1.07, 1.41, -0.32)
   of the captured flight; the takeoff state, not the torque limits, is what is far from
-  consistent.  Next: fit phi_s (and the latent end) to the captured takeoff velocity, or
-  more phi_s points, before phase 1.
+  consistent.  More phi_s points do not cure it (8 or 12 points: (-4.0, 0.7, -4.3)), so
+  the GPDM-mean joint velocities (11-point latent spline) with a pinned toe are themselves
+  off at takeoff.  Next: fit the latent end / phi_s to the captured takeoff state, or let
+  the toe unpin shortly before takeoff, before phase 1.
 """
 from __future__ import annotations
 
