@@ -1,14 +1,13 @@
 """Reader for Acclaim motion files (AMC), ``:FULLY-SPECIFIED`` as in the CMU database."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .asf import Skeleton
-from .errors import MocapFormatError
+from .errors import MocapFormatError, parse_number
 
 
 @dataclass
@@ -104,16 +103,7 @@ def parse_amc(text: str, skeleton: Skeleton, path: str | Path | None = None,
         vals = toks[1:]
         if len(vals) != counts[bone]:
             raise MocapFormatError(p, ln, f"bone {bone!r} needs {counts[bone]} values, got {len(vals)}")
-        out = []
-        for t in vals:
-            try:
-                v = float(t)
-            except ValueError:
-                raise MocapFormatError(p, ln, f"not a number: {t!r}") from None
-            if not math.isfinite(v):
-                raise MocapFormatError(p, ln, f"non-finite number: {t!r}")
-            out.append(v)
-        cur[bone] = out
+        cur[bone] = [parse_number(t, p, ln) for t in vals]
     close(last_ln)
     if not frames:
         raise MocapFormatError(p, last_ln or None, "no frames")

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MocapFormatError
+from .errors import MocapFormatError, parse_number
 
 INCH = 0.0254
 DOF_NAMES = ("rx", "ry", "rz", "tx", "ty", "tz", "l")
@@ -86,20 +86,10 @@ class Skeleton:
         return out
 
 
-def _num(tok: str, path: str | None, line: int) -> float:
-    try:
-        v = float(tok)
-    except ValueError:
-        raise MocapFormatError(path, line, f"not a number: {tok!r}") from None
-    if not math.isfinite(v):
-        raise MocapFormatError(path, line, f"non-finite number: {tok!r}")
-    return v
-
-
 def _nums(toks: list[str], n: int, path: str | None, line: int, what: str) -> np.ndarray:
     if len(toks) != n:
         raise MocapFormatError(path, line, f"{what} needs {n} values, got {len(toks)}")
-    return np.array([_num(t, path, line) for t in toks], dtype=float)
+    return np.array([parse_number(t, path, line) for t in toks], dtype=float)
 
 
 def _lines(text: str) -> list[tuple[int, list[str]]]:
@@ -185,9 +175,9 @@ def parse_asf(text: str, path: str | Path | None = None) -> Skeleton:
             if len(toks) != 2:
                 raise MocapFormatError(p, ln, "units line needs a name and a value")
             if key == "mass":
-                mass_u = _num(toks[1], p, ln)
+                mass_u = parse_number(toks[1], p, ln)
             elif key == "length":
-                length_u = _num(toks[1], p, ln)
+                length_u = parse_number(toks[1], p, ln)
                 if length_u <= 0:
                     raise MocapFormatError(p, ln, "length unit must be positive")
             elif key == "angle":
@@ -268,7 +258,7 @@ def parse_asf(text: str, path: str | Path | None = None) -> Skeleton:
                 m = re.fullmatch(r"\(\s*(\S+)\s+(\S+)\s*\)", rest)
                 if m is None:
                     raise MocapFormatError(p, ln, "limits must look like (lo hi)")
-                lo, hi = _num(m.group(1), p, ln), _num(m.group(2), p, ln)
+                lo, hi = parse_number(m.group(1), p, ln), parse_number(m.group(2), p, ln)
                 if lo > hi:
                     raise MocapFormatError(p, ln, "lower limit above upper limit")
                 if "dof" not in cur:

@@ -1,6 +1,8 @@
 """Errors raised by the Acclaim ASF/AMC readers."""
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 
 
@@ -19,3 +21,14 @@ class MocapFormatError(ValueError):
         if line is not None:
             where = f"{where}, line {line}"
         super().__init__(f"{where}: {message}")
+
+
+def parse_number(tok: str, path: str | None, line: int) -> float:
+    """A finite float from token ``tok``, or a MocapFormatError naming the file and line."""
+    try:
+        v = float(tok)
+    except ValueError:
+        raise MocapFormatError(path, line, f"not a number: {tok!r}") from None
+    if not math.isfinite(v):
+        raise MocapFormatError(path, line, f"non-finite number: {tok!r}")
+    return v
