@@ -6,7 +6,6 @@ Only the parts of the format that the CMU files use are supported: ``:version``,
 """
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
