@@ -21,3 +21,23 @@ def test_consistent_start_repairs_continuity_and_forces():
     nS, nF = 5, 5
     contact = list(range(nS)) + list(range(nS + nF, d0.shape[0]))
     assert np.all(np.linalg.norm(d1[contact], axis=1) <= np.linalg.norm(d0[contact], axis=1) + 1e-9)
+
+
+def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
+    """The refitted phi_s removes the (12, -4, 12) takeoff velocity of the toe-pinned start."""
+    from latentoc.jump.transcription import anchored_function
+    from latentoc.spline import BSpline
+
+    js = setup()
+    s = JumpSettings()
+    ph = js.phases
+    anch = anchored_function(js.sym, js.smap, js.gpdm, js.geom)
+    tt = np.array([ph.takeoff])
+
+    def takeoff_velocity(ig):
+        X = [BSpline(s.n_control, ph.duration).evaluate(ig["P"], tt, k) for k in range(3)]
+        f = [BSpline(s.n_phi_stance, ph.takeoff).evaluate(ig["phi_s"][:, None], tt, k)[:, 0][None] for k in range(3)]
+        return np.array(anch(X[0].T, X[1].T, X[2].T, *f, 0.0)[1]).ravel()
+
+    raw, fitted = takeoff_velocity(initial_guess(js, s, fit_base=False)), takeoff_velocity(initial_guess(js, s))
+    assert np.linalg.norm(raw) > 5.0 and np.linalg.norm(fitted) < 1.0

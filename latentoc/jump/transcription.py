@@ -71,8 +71,19 @@ training fit, p = 1 phase 2, the distance), measured 2026-11-23 on 2 loaded core
   of the captured flight; the takeoff state, not the torque limits, is what is far from
   consistent.  More phi_s points do not cure it (8 or 12 points: (-4.0, 0.7, -4.3)), so
   the GPDM-mean joint velocities (11-point latent spline) with a pinned toe are themselves
-  off at takeoff.  Next: fit the latent end / phi_s to the captured takeoff state, or let
-  the toe unpin shortly before takeoff, before phase 1.
+  off at takeoff.
+* repaired start (:func:`latentoc.jump.problem.fit_anchored_base`, default since): phi_s
+  (now 8 points) and phi_l are least-squares fitted so that the toe-pinned base follows the
+  captured base pose over the stance / landing frames plus 0.3 x the velocity mismatch at
+  takeoff / just after touchdown.  Anchored takeoff velocity (12.1, -3.8, 11.8) ->
+  (0.25, -0.02, -0.15); largest node base residual (nodes 10/9/14, switches off, tube 0.02)
+  raw 25.5 -> 16.6 body weights, after ``consistent_start`` 23.7 -> 13.1 (stance 20.3 -> 10.9,
+  flight 15.1 -> 1.8, landing 23.7 -> 13.1, the touchdown node).  The captured takeoff
+  velocity (0.98, 1.38, -0.73) is not reachable with a pinned toe: the captured toe tip
+  leaves the ground at about 0.317 s and at the detected takeoff (0.35 s) is already 2.2 cm
+  up moving at (1.34, 1.39) m/s, so relative to the toe the captured base has about zero
+  vertical velocity there.  Next: an earlier takeoff time (toe-tip lift-off) or an unpinned
+  toe over the last stance interval.
 """
 from __future__ import annotations
 
@@ -106,7 +117,7 @@ class JumpSettings:
     n_stance: int = 10
     n_flight: int = 9
     n_land: int = 14
-    n_phi_stance: int = 5
+    n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
     complementarity_eps: float = 1e-4  # body weights x metres
     ball_tolerance: float = 0.02
