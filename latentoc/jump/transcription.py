@@ -82,7 +82,12 @@ training fit, p = 1 phase 2, the distance), measured 2026-11-23 on 2 loaded core
   velocity (0.98, 1.38, -0.73) is not reachable with a pinned toe: the captured toe tip
   leaves the ground at about 0.317 s and at the detected takeoff (0.35 s) is already 2.2 cm
   up moving at (1.34, 1.39) m/s, so relative to the toe the captured base has about zero
-  vertical velocity there.  Next: an earlier takeoff time (toe-tip lift-off) or an unpinned
+  vertical velocity there.  Solves from the repaired start (tube 0.02, two-phase, L-BFGS,
+  2 loaded cores): switches off: phase 1 converges in 129 iterations (was 262) at 0.132 m,
+  phase 2 in 197 iterations at 0.553 m (was 0.432 m), 254 s wall; switches on: phase 1 stops
+  at 300 iterations with violation 0.034 (was 0.25 at 400) and phase 2 ends in "infeasible
+  problem detected" (violation 0.0072: takeoff position, tube 0.0012, ball complementarity),
+  so the switches stay off.  Next: an earlier takeoff time (toe-tip lift-off) or an unpinned
   toe over the last stance interval.
 """
 from __future__ import annotations
