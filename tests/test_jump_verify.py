@@ -47,6 +47,16 @@ def test_wrong_wrench_is_caught():
     assert 0.4 < r["max_dynamics_residual"] < 0.6  # half the weight missing
 
 
+def test_node_wrench_mismatch_against_the_needed_wrench():
+    model, arrays = _static_arrays()
+    W = 63.86 * 9.81
+    arrays.update(node_t=arrays["t"][[0, 2]], node_wrench=arrays["wrench"][[0, 2]].copy())
+    assert verify(model, arrays)["max_node_wrench_mismatch"] < 1e-12
+    arrays["node_wrench"][1, 2] += 0.1 * W  # a node whose normal force is off by 10 % of body weight
+    r = verify(model, arrays)
+    assert np.isclose(r["max_node_wrench_mismatch"], 0.1) and r["max_flight_residual"] == 0.0
+
+
 @pytest.mark.skipif(not os.environ.get("LATENTOC_SLOW"), reason="a jump solve takes minutes on 2 shared cores")
 def test_quick_solve_verifies():
     from latentoc.problem import load_problem

@@ -302,17 +302,20 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
         fs = point_forces(lam[:, j], s.mu)
         my = sum((pts[k][2] - pts[2][2]) * fs[k][0] - (pts[k][0] - pts[2][0]) * fs[k][1] for k in (0, 1))
         node_w[j] = [node_f[j, 0], 0.0, node_f[j, 1], 0.0, my, 0.0]
-    for mask, sl in ((st, slice(0, nS)), (la, slice(nS, None))):
-        for c in range(6):
-            wrench[mask, c] = np.interp(t[mask], node_t[sl], node_w[sl, c])
+    # 1 kHz wrench: in contact, the wrench the motion needs, solved from the three sagittal
+    # base rows of RNEA (fx, fz, my per foot; the two feet carry equal wrenches by symmetry), so
+    # that verify() checks its cone, unilaterality and centre of pressure between the nodes;
+    # the node wrenches of the NLP (from its force generators) are exported as node_wrench
     tau = np.zeros((len(t), js.model.nv - 6))
+    rows = [0, 2, 4]
+    ids = [js.model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")]
     for i in range(len(t)):
         full = pin.rnea(js.model, d, Q[i], V[i], A[i])
         if st[i] or la[i]:
             pin.computeJointJacobians(js.model, d, Q[i])
             pin.updateFramePlacements(js.model, d)
-            J = sum(pin.getFrameJacobian(js.model, d, js.model.getFrameId(n), pin.LOCAL_WORLD_ALIGNED)
-                    for n in ("ltoes_end", "rtoes_end"))
+            J = sum(pin.getFrameJacobian(js.model, d, f, pin.LOCAL_WORLD_ALIGNED) for f in ids)
+            wrench[i, rows] = np.linalg.solve(J.T[np.ix_(rows, rows)], full[rows])
             full = full - J.T @ wrench[i]
         tau[i] = full[6:]
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "contact": (st | la).astype(np.int8),

@@ -5,7 +5,11 @@ wrench at the toe tip, world-aligned, linearly interpolated between nodes, ``con
 ``tau_min``/``tau_max``, ``sigma2``, the heel offset and the landing/settle times):
 
 * base-wrench residual: ``max |rnea(q, v, a)[:6] - sum_feet J^T w|`` over all 6 rows, as a
-  fraction of body weight (``pinocchio.rnea``, frame Jacobians);
+  fraction of body weight (``pinocchio.rnea``, frame Jacobians); in flight (w = 0) it is the
+  ballistic error of the base, in contact it is nonzero only if the exported wrench is not
+  the one the motion needs (the exporter solves it from the sagittal rows);
+* ``max_node_wrench_mismatch``: the NLP's node wrenches (``node_t``, ``node_wrench``, from
+  its force generators) against the needed wrench at the nearest sample, body weights;
 * the wrench the motion *needs*: the 3 sagittal base rows solved for (fx, fz, my) of
   each (symmetric) foot; from it the minimum normal force, the maximum friction ratio
   |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe);
@@ -37,7 +41,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
     mass = sum(i.mass for i in model.inertias)
     W = mass * G
     ids = {n: model.getFrameId(n) for n in (FOOT, TOE, "ltoes_end", "rtoes_end")}
-    res_max, lat_max, tau_viol, sym_tau = 0.0, 0.0, 0.0, 0.0
+    res_max, lat_max, tau_viol, sym_tau, flight_res = 0.0, 0.0, 0.0, 0.0, 0.0
     fz_min, ratio_max, cop_margin = np.inf, 0.0, np.inf
     zmp_margin, com_margin = np.inf, np.inf
     act = tmax - tmin > 1e-6
@@ -51,6 +55,8 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
         gen = (JL + JR).T @ Wr[i] if contact[i] else np.zeros(model.nv)
         r = tau[:6] - gen[:6]
         res_max = max(res_max, float(np.max(np.abs(r))) / W)
+        if not contact[i]:
+            flight_res = max(flight_res, float(np.max(np.abs(r))) / W)
         lat_max = max(lat_max, float(np.max(np.abs(r[[1, 3, 5]]))) / W)
         tj = tau[6:] - gen[6:]
         tau_viol = max(tau_viol, float(np.max(np.maximum(tmin[act] - tj[act], 0) + np.maximum(tj[act] - tmax[act], 0))))
@@ -75,7 +81,14 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
             zmp_margin = min(zmp_margin, margin(As, bs, np.array(zmp(c, dh, mass))))
             if t[i] >= t_settle - 1e-9:
                 com_margin = min(com_margin, margin(As, bs, c))
-    out = {"max_dynamics_residual": res_max, "max_lateral_residual": lat_max,
+    node_mis = 0.0
+    if "node_wrench" in arrays and "node_t" in arrays:
+        for tn, wn in zip(np.asarray(arrays["node_t"]), np.asarray(arrays["node_wrench"])):
+            i = int(np.argmin(np.abs(t - tn)))
+            if contact[i]:
+                node_mis = max(node_mis, float(np.max(np.abs(wn - Wr[i]))) / W)
+    out = {"max_dynamics_residual": res_max, "max_flight_residual": flight_res,
+           "max_node_wrench_mismatch": node_mis, "max_lateral_residual": lat_max,
            "min_normal_force": float(fz_min), "max_friction_ratio": ratio_max, "cop_margin": float(cop_margin),
            "zmp_margin": float(zmp_margin), "com_margin": float(com_margin),
            "max_torque_violation": tau_viol, "max_symmetric_torque": sym_tau}
