@@ -52,10 +52,10 @@ import numpy as np
 
 from .dynamics import SymbolicModel
 from .gpdm import GPDM
-from .latent_motion import gp_grid_function, joint_node_function, latent_motion_grid
+from .latent_motion import gp_grid_function, joint_node_function, latent_motion_grid, node_derivative_functions
 from .spline import BSpline
 
-__all__ = ["SplineNLP", "TranscriptionSettings", "build_latent_nlp", "fixed_rows",
+__all__ = ["SplineNLP", "TranscriptionSettings", "build_latent_nlp", "fixed_rows", "node_objective_functions",
            "fit_control_points", "gauss_legendre_nodes", "constraint_times", "trapezoid_cost"]
 
 
@@ -72,6 +72,7 @@ class TranscriptionSettings:
     joint_limits: bool = True
     torque_limits: list[float] = field(default_factory=list)
     structured_derivatives: bool = True  # lifted grad/Jacobian/Hessian (module doc, Performance)
+    jit: bool = True  # per-node derivatives compiled to C, cached on disk (latentoc.solver.compiled_functions)
 
 
 @dataclass
@@ -194,27 +195,57 @@ def _affine(expr: ca.MX, w: ca.MX) -> tuple[ca.DM, ca.DM]:
     return ca.sparsify(M), c
 
 
-def _lifted_derivatives(w: ca.MX, z_w: ca.MX, z: ca.MX, J: ca.MX, x_w: ca.MX, x: ca.MX, g: ca.MX) -> dict:
+def node_objective_functions(z: ca.MX, U: ca.MX, quad_w: np.ndarray, nodes: dict[str, ca.Function],
+                             lifted: bool = True) -> tuple[ca.Function, ca.Function]:
+    """(z -> (J, dJ/dz), z -> d2J/dz2) for J = sum_k w_k L(u_k), u_k column k of U(z) (3n x K).
+
+    L, its gradient and its Hessian per node come from ``nodes``
+    (:func:`latentoc.latent_motion.node_derivative_functions`, compiled); the chain rule
+    through u = U(z) is left to CasADi::
+
+        dJ/dz = J_U^T g_w,   d2J/dz2 = J_U^T blockdiag(w_k H_k) J_U + d2(g_w . U)/dz2 (g_w fixed)
+
+    with g_w = (w_k dL/du_k)_k. ``lifted=False`` means z = vec(U) (U is the symbol itself),
+    where the Hessian is the block diagonal alone.
+    """
+    nu, K = U.shape
+    wq = np.asarray(quad_w, dtype=float)
+    L, G = nodes["grad"].map(K)(U)
+    Gw = G * ca.DM(np.tile(wq, (nu, 1)))
+    f_grad = ca.Function("lifted_grad_f", [z], [ca.mtimes(L, ca.DM(wq)), ca.jtimes(ca.vec(U), z, ca.vec(Gw), True)])
+    _, G, HU = nodes["hess"].map(K)(U)
+    HUw = HU * ca.DM(np.tile(np.repeat(wq, nu), (nu, 1)))
+    H = ca.diagcat(*ca.horzsplit(HUw, nu))
+    if lifted:
+        lam = ca.MX.sym("lam", nu * K)
+        second = ca.Function("motion_hess", [z, lam], [ca.hessian(ca.dot(lam, ca.vec(U)), z)[0]])
+        Ju = ca.jacobian(ca.vec(U), z)
+        H = ca.mtimes([Ju.T, H, Ju]) + second(z, ca.vec(G * ca.DM(np.tile(wq, (nu, 1)))))
+    return f_grad, ca.Function("lifted_hess_f", [z], [H])
+
+
+def _lifted_derivatives(w: ca.MX, z_w: ca.MX, z: ca.MX, f_grad: ca.Function, f_hess: ca.Function,
+                        x_w: ca.MX, x: ca.MX, g: ca.MX) -> dict:
     """grad_f, jac_g and hess_lag for ``nlpsol`` through lifted variables.
 
-    The objective J is an expression in the symbol z (x, xd, xdd at the quadrature
-    nodes), with z = z_w = M_z w + c_z in the NLP; the constraints g are an expression in
-    the symbol x (x at the constraint grid), x = x_w = M_g w + c_g. Each node's terms
-    depend on its own 3d (objective) or d (constraints) lifted values, so the Hessians
-    and the Jacobian in z and x are block diagonal and CasADi's colouring needs 3d and d
-    directions instead of one per decision variable. With the constant maps::
+    The objective is given as Functions of the symbol z (x, xd, xdd at the quadrature
+    nodes: ``f_grad`` z -> (J, dJ/dz), ``f_hess`` z -> d2J/dz2, see
+    :func:`node_objective_functions`), with z = z_w = M_z w + c_z in the NLP; the
+    constraints g are an expression in the symbol x (x at the constraint grid),
+    x = x_w = M_g w + c_g. Each node's terms depend on its own 3d (objective) or d
+    (constraints) lifted values, so the Hessians and the Jacobian in z and x are block
+    diagonal and CasADi's colouring needs 3d and d directions instead of one per decision
+    variable. With the constant maps::
 
         grad_f = M_z^T dJ/dz,  jac_g = dg/dx M_g,
         hess_lag = lam_f M_z^T (d2J/dz2) M_z + M_g^T (d2 (lam_g . g)/dx2) M_g
     """
-    Mz, cz = _affine(z_w, w)
+    Mz, _ = _affine(z_w, w)
     Mg, cg = _affine(x_w, w)
     lam_f, lam_g, p = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.shape[0]), ca.MX.sym("p", 0)
-    f_grad = ca.Function("lifted_grad_f", [z], [J, ca.gradient(J, z)])
-    f_hess = ca.Function("lifted_hess_f", [z], [ca.hessian(J, z)[0]])
     g_jac = ca.Function("lifted_jac_g", [x], [g, ca.jacobian(g, x)])
     g_hess = ca.Function("lifted_hess_g", [x, lam_g], [ca.hessian(ca.dot(lam_g, g), x)[0]])
-    z_w, x_w = ca.mtimes(Mz, w) + cz, ca.mtimes(Mg, w) + cg
+    x_w = ca.mtimes(Mg, w) + cg
     Jw, gzw = f_grad(z_w)
     Hzw = f_hess(z_w)
     gw, Jxw = g_jac(x_w)
@@ -277,7 +308,10 @@ def build_latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: TranscriptionSe
     nlp = {"x": w, "f": J, "g": ca.vertcat(*g)}
     derivatives = None
     if settings.structured_derivatives and tmax is None:
-        derivatives = _lifted_derivatives(w, ca.vec(Zw), ca.vec(Zs), J_z, ca.vec(Xw), ca.vec(Xs), g_x)
+        z = ca.vec(Zs)
+        f_grad, f_hess = node_objective_functions(z, ca.vertcat(Qq, Vq, Aq), quad_w,
+                                                  node_derivative_functions(model, jit=settings.jit))
+        derivatives = _lifted_derivatives(w, ca.vec(Zw), z, f_grad, f_hess, ca.vec(Xw), ca.vec(Xs), g_x)
         nlp["derivatives"] = derivatives
     return SplineNLP(spline=spline, free=free, P_init=P_init, nlp=nlp, derivatives=derivatives,
                      lbx=np.full(n, -np.inf), ubx=np.full(n, np.inf),

@@ -66,3 +66,54 @@ def test_custom_derivatives_are_used(hessian):
     assert r.success and np.allclose(r.x, [0.78641515, 0.61769831], atol=1e-4)
     assert (len(calls) > 0) == (hessian == "exact")
     assert "derivatives" in nlp  # the caller's dict is not modified
+
+
+def _small_functions():
+    x = ca.SX.sym("x", 3)
+    f = ca.Function("lc_test_f", [x], [ca.sin(x[0]) * ca.exp(x[1]) + x[2] ** 3, ca.hessian(ca.sumsqr(ca.sin(x)), x)[0]])
+    g = ca.Function("lc_test_g", [x], [ca.cos(x) * x[0]])
+    return [f, g]
+
+
+def test_compiled_functions_match_and_are_cached(tmp_path, monkeypatch):
+    """Compiled Functions equal the SX ones at random points; the second call loads the
+    cached library without running the compiler."""
+    from latentoc import solver
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.delenv("LATENTOC_JIT", raising=False)
+    fns = _small_functions()
+    compiled = solver.compiled_functions(fns)
+    libs = list(tmp_path.glob("lc_*.so"))
+    assert len(libs) == 1 and not list(tmp_path.glob(".build-*"))  # no temporary left behind
+    assert [c.name() for c in compiled] == ["lc_test_f", "lc_test_g"]
+    assert all(c.is_a("External") for c in compiled)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        x = rng.standard_normal(3)
+        for f, c in zip(fns, compiled):
+            for a, b in zip(f.call([x]), c.call([x])):
+                assert a.sparsity() == b.sparsity()
+                assert np.allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-12)
+
+    def no_compiler(*args, **kwargs):
+        raise AssertionError("compiler run despite the cache")
+    monkeypatch.setattr(solver.subprocess, "run", no_compiler)
+    again = solver.compiled_functions(_small_functions())
+    assert all(c.is_a("External") for c in again) and list(tmp_path.glob("lc_*.so")) == libs
+
+
+def test_compiled_functions_fall_back_without_compiler(tmp_path, monkeypatch):
+    from latentoc import solver
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.delenv("LATENTOC_JIT", raising=False)
+    monkeypatch.setattr(solver, "_compiler", lambda: None)
+    fns = _small_functions()
+    with pytest.warns(UserWarning, match="no C compiler"):
+        out = solver.compiled_functions(fns)
+    assert out == fns and not list(tmp_path.iterdir())
+    monkeypatch.setattr(solver, "_compiler", lambda: "/bin/false")  # a "compiler" that fails
+    with pytest.warns(UserWarning, match="compiling the NLP Functions failed"):
+        assert solver.compiled_functions(fns) == fns
+    assert not list(tmp_path.glob("lc_*.so")) and not list(tmp_path.glob(".build-*"))
+    monkeypatch.setenv("LATENTOC_JIT", "0")
+    assert solver.compiled_functions(fns) == fns
