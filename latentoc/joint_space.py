@@ -6,6 +6,12 @@ p_1, p_m, and for "rest" also p_2, p_(m-1)), the same objective (Eq. 4, L = |tau
 with Gauss-Legendre quadrature) and joint/torque limits. Every free control point is
 limited to +-k degrees around its value in the spline fit of the training motion (the
 "joint range" of Table 2).
+
+Derivatives (``settings.structured_derivatives``, default, without torque limits): the same
+treatment as the latent NLP, so the comparison is fair: the objective's gradient and
+Hessian come from the compiled per-node |tau|^2 derivatives
+(:func:`latentoc.latent_motion.node_derivative_functions`) through the constant map from
+w to u = (q, v, a) at the quadrature nodes; the joint-limit rows are linear in w.
 """
 
 from __future__ import annotations
@@ -14,11 +20,11 @@ import casadi as ca
 import numpy as np
 
 from .dynamics import SymbolicModel
-from .latent_motion import joint_node_function
+from .latent_motion import joint_node_function, node_derivative_functions
 from .spline import BSpline
-from .transcription import (SplineNLP, TranscriptionSettings, _symbolic_control_points,
+from .transcription import (SplineNLP, TranscriptionSettings, _lifted_derivatives, _symbolic_control_points,
                             constraint_times, fit_control_points, fixed_rows,
-                            gauss_legendre_nodes, torque_limit_vector)
+                            gauss_legendre_nodes, node_objective_functions, torque_limit_vector)
 
 __all__ = ["build_joint_nlp", "joint_motion"]
 
@@ -37,7 +43,8 @@ def build_joint_nlp(model: SymbolicModel, settings: TranscriptionSettings, t_tra
     quad_t, quad_w = gauss_legendre_nodes(spline, settings.quadrature_points)
     B = [ca.DM(spline.basis(quad_t, r).T) for r in (0, 1, 2)]
     node = joint_node_function(model).map(len(quad_t))
-    L, tau = node(ca.mtimes(Pt, B[0]), ca.mtimes(Pt, B[1]), ca.mtimes(Pt, B[2]))
+    Uw = [ca.mtimes(Pt, Br) for Br in B]
+    L, tau = node(*Uw)
     J = ca.mtimes(L, ca.DM(quad_w))
     grid_t = constraint_times(spline, settings.constraint_points)
     g, lbg, ubg = [], [], []
@@ -53,8 +60,16 @@ def build_joint_nlp(model: SymbolicModel, settings: TranscriptionSettings, t_tra
         ubg.append(np.tile(tmax, len(quad_t)))
     w0 = P_init[free].ravel()
     k = np.radians(float(joint_range_deg))
-    return SplineNLP(spline=spline, free=free, P_init=P_init,
-                     nlp={"x": w, "f": J, "g": ca.vertcat(*g) if g else ca.MX(0, 1)},
+    nlp = {"x": w, "f": J, "g": ca.vertcat(*g) if g else ca.MX(0, 1)}
+    derivatives = None
+    if settings.structured_derivatives and tmax is None and settings.joint_limits:
+        U = ca.MX.sym("U", 3 * n, len(quad_t))
+        f_grad, f_hess = node_objective_functions(ca.vec(U), U, quad_w,
+                                                  node_derivative_functions(model, jit=settings.jit), lifted=False)
+        x = ca.MX.sym("Qg", g[0].shape[0])
+        derivatives = _lifted_derivatives(w, ca.vec(ca.vertcat(*Uw)), ca.vec(U), f_grad, f_hess, g[0], x, x)
+        nlp["derivatives"] = derivatives
+    return SplineNLP(spline=spline, free=free, P_init=P_init, nlp=nlp, derivatives=derivatives,
                      lbx=w0 - k, ubx=w0 + k,
                      lbg=np.concatenate(lbg) if lbg else np.zeros(0),
                      ubg=np.concatenate(ubg) if ubg else np.zeros(0),
