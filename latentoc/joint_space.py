@@ -22,7 +22,8 @@ import numpy as np
 from .dynamics import SymbolicModel
 from .latent_motion import joint_node_function, node_derivative_functions
 from .spline import BSpline
-from .transcription import (SplineNLP, TranscriptionSettings, _lifted_derivatives, _symbolic_control_points,
+from .transcription import (SplineNLP, TranscriptionSettings, _lifted_constraints, _lifted_derivatives,
+                            _symbolic_control_points,
                             constraint_times, fit_control_points, fixed_rows,
                             gauss_legendre_nodes, node_objective_functions, torque_limit_vector)
 
@@ -66,8 +67,9 @@ def build_joint_nlp(model: SymbolicModel, settings: TranscriptionSettings, t_tra
         U = ca.MX.sym("U", 3 * n, len(quad_t))
         f_grad, f_hess = node_objective_functions(ca.vec(U), U, quad_w,
                                                   node_derivative_functions(model, jit=settings.jit), lifted=False)
-        x = ca.MX.sym("Qg", g[0].shape[0])
-        derivatives = _lifted_derivatives(w, ca.vec(ca.vertcat(*Uw)), ca.vec(U), f_grad, f_hess, g[0], x, x)
+        x, lam_g = ca.MX.sym("Qg", g[0].shape[0]), ca.MX.sym("lam_g", g[0].shape[0])
+        rows = _lifted_constraints(w, g[0], x, x, lam_g)
+        derivatives = _lifted_derivatives(w, ca.vec(ca.vertcat(*Uw)), ca.vec(U), f_grad, f_hess, rows, lam_g)
         nlp["derivatives"] = derivatives
     return SplineNLP(spline=spline, free=free, P_init=P_init, nlp=nlp, derivatives=derivatives,
                      lbx=w0 - k, ubx=w0 + k,

@@ -35,7 +35,7 @@ from .dynamics import SymbolicModel
 from .gpdm import GPDM
 
 __all__ = ["latent_kinematics", "latent_node_function", "gp_grid_function", "joint_node_function",
-           "latent_motion_grid", "numeric_latent_motion", "node_derivative_functions"]
+           "latent_motion_grid", "numeric_latent_motion", "node_derivative_functions", "gp_grid_derivatives"]
 
 
 def latent_kinematics(gpdm: GPDM) -> ca.Function:
@@ -115,6 +115,47 @@ def gp_grid_function(gpdm: GPDM, n_points: int) -> ca.Function:
     sigma2 = (b1 + 1.0 / b3) - ca.sum1(V * V)
     Q = ca.repmat(ca.DM(gpdm.Y_mean), 1, K) + ca.mtimes(ca.DM(obs["A"].T / gpdm.W[:, None]), kmat)
     return ca.Function("gp_grid", [X], [sigma2, Q], ["X"], ["sigma2", "Q"])
+
+
+def gp_grid_derivatives(gpdm: GPDM, n_points: int) -> dict[str, ca.Function]:
+    """Closed-form first and second derivatives of sigma^2 (Eq. 19) and mu_Q (Eq. 18) at K
+    latent points: MX Functions ``"jac"`` X (d x K) -> (dS, dQ) and ``"hess"``
+    (X, lam_s (1 x K), lam_q (D x K)) -> H.
+
+    dS[a, j] = d sigma^2_j / dx_a, rows a*D..(a+1)*D of dQ are dQ_j / dx_a, and row p of H
+    (pairs a <= b in row-major order) is d2/dx_a dx_b (lam_s_j sigma^2_j + lam_q_j . Q_j).
+    With k_i = b1 exp(-b2/2 |e_i|^2), e_i = x - x_i, alpha = K_Y^-1 k, C = K_Y^-1 Yc W / W::
+
+        dk_i/dx_a = -b2 k_i e_ia,  d2k_i/dx_a dx_b = k_i (b2^2 e_ia e_ib - b2 delta_ab)
+        d sigma^2 = -2 alpha . dk,  d2 sigma^2 = -2 (alpha . d2k + dk_a^T K_Y^-1 dk_b)
+        dQ = C dk,                  lam_q . d2Q = (C^T lam_q) . d2k
+    """
+    d, N, D = gpdm.latent_dim, gpdm.X.shape[0], gpdm.output_dim
+    K = int(n_points)
+    b1, b2, _ = (float(b) for b in gpdm.beta)
+    obs = gpdm._obs()
+    Linv = ca.sparsify(ca.DM(np.tril(obs["Linv"])))
+    C = ca.DM(obs["A"].T / gpdm.W[:, None])  # D x N
+    X, ls, lq = ca.MX.sym("X", d, K), ca.MX.sym("lam_s", 1, K), ca.MX.sym("lam_q", D, K)
+    E = [ca.repmat(X[a, :], N, 1) - ca.repmat(ca.DM(gpdm.X[:, a]), 1, K) for a in range(d)]
+    r2 = E[0] * E[0]
+    for a in range(1, d):
+        r2 = r2 + E[a] * E[a]
+    kmat = b1 * ca.exp(-0.5 * b2 * r2)
+    Dk = [-b2 * kmat * e for e in E]
+    LD = [ca.mtimes(Linv, g) for g in Dk]
+    alpha = ca.mtimes(Linv.T, ca.mtimes(Linv, kmat))
+    dS = ca.vertcat(*[-2.0 * ca.sum1(alpha * g) for g in Dk])
+    dQ = ca.vertcat(*[ca.mtimes(C, g) for g in Dk])
+    Wk = (-2.0 * ca.repmat(ls, N, 1) * alpha + ca.mtimes(C.T, lq)) * kmat
+    swk = ca.sum1(Wk)
+    rows = []
+    for a in range(d):
+        for b in range(a, d):
+            h = b2 * b2 * ca.sum1(Wk * E[a] * E[b]) - 2.0 * ls * ca.sum1(LD[a] * LD[b])
+            rows.append(h - b2 * swk if a == b else h)
+    return {"jac": ca.Function("gp_grid_jac", [X], [dS, dQ], ["X"], ["dS", "dQ"]),
+            "hess": ca.Function("gp_grid_hess", [X, ls, lq], [ca.vertcat(*rows)], ["X", "lam_s", "lam_q"], ["H"])}
 
 
 def latent_motion_grid(gpdm: GPDM, n_points: int) -> ca.Function:

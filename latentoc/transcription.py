@@ -52,7 +52,7 @@ import numpy as np
 
 from .dynamics import SymbolicModel
 from .gpdm import GPDM
-from .latent_motion import gp_grid_function, joint_node_function, latent_motion_grid, node_derivative_functions
+from .latent_motion import gp_grid_derivatives, gp_grid_function, joint_node_function, latent_motion_grid, node_derivative_functions
 from .spline import BSpline
 
 __all__ = ["SplineNLP", "TranscriptionSettings", "build_latent_nlp", "fixed_rows", "node_objective_functions",
@@ -72,6 +72,7 @@ class TranscriptionSettings:
     joint_limits: bool = True
     torque_limits: list[float] = field(default_factory=list)
     structured_derivatives: bool = True  # lifted grad/Jacobian/Hessian (module doc, Performance)
+    closed_form_grid: bool = True  # closed-form sigma^2 / mu_Q derivatives on the grid (else CasADi's)
     jit: bool = True  # per-node derivatives compiled to C, cached on disk (latentoc.solver.compiled_functions)
 
 
@@ -224,38 +225,76 @@ def node_objective_functions(z: ca.MX, U: ca.MX, quad_w: np.ndarray, nodes: dict
     return f_grad, ca.Function("lifted_hess_f", [z], [H])
 
 
+def _lifted_constraints(w: ca.MX, x_w: ca.MX, x: ca.MX, g: ca.MX, lam_g: ca.MX) -> tuple[ca.MX, ca.MX, ca.MX]:
+    """(g, dg/dw, d2 (lam_g . g)/dw2) in w for constraints g given as an expression in the
+    symbol x (block diagonal per node), x = x_w = M_g w + c_g: CasADi's colouring in x, then
+    the chain rule jac = dg/dx M_g, hess = M_g^T (d2 (lam_g . g)/dx2) M_g."""
+    Mg, cg = _affine(x_w, w)
+    g_jac = ca.Function("lifted_jac_g", [x], [g, ca.jacobian(g, x)])
+    g_hess = ca.Function("lifted_hess_g", [x, lam_g], [ca.hessian(ca.dot(lam_g, g), x)[0]])
+    x_w = ca.mtimes(Mg, w) + cg
+    gw, Jxw = g_jac(x_w)
+    return gw, ca.mtimes(Jxw, Mg), ca.mtimes([Mg.T, g_hess(x_w, lam_g), Mg])
+
+
+def _grid_constraints(gpdm: GPDM, G0f: np.ndarray, Xw: ca.MX, g_of_x: ca.Function, joint_limits: bool,
+                      lam_g: ca.MX) -> tuple[ca.MX, ca.MX, ca.MX]:
+    """(g, dg/dw, d2 (lam_g . g)/dw2) of the grid rows (sigma^2, then Q if ``joint_limits``)
+    from the closed-form derivatives (:func:`~latentoc.latent_motion.gp_grid_derivatives`).
+
+    x_j = sum_r G0[j, r] p_r, and w holds the free rows p_r row-major (index r d + a), so
+    dg_j/dw_(r,a) = G0f[j, r] dg_j/dx_a and the Hessian is sum_(a,b) kron(G0f^T diag(h_ab) G0f, E_ab).
+    """
+    d, D = gpdm.latent_dim, gpdm.output_dim
+    Kg, nf = G0f.shape
+    ls = lam_g[:Kg].T
+    lq = ca.reshape(lam_g[Kg:], D, Kg) if joint_limits else ca.DM.zeros(D, Kg)
+    fns = gp_grid_derivatives(gpdm, Kg)
+    dS, dQ = fns["jac"](Xw)
+    Hp = fns["hess"](Xw, ls, lq)
+    G = ca.DM(G0f)
+    S = dS.T  # Kg x d
+    jac = [ca.horzcat(*[S * ca.repmat(G[:, r], 1, d) for r in range(nf)])]
+    if joint_limits:
+        Dq = ca.horzcat(*[ca.vec(dQ[a * D:(a + 1) * D, :]) for a in range(d)])  # (Kg D) x d, row j D + i
+        Grep = ca.DM(np.repeat(G0f, D, axis=0))
+        jac.append(ca.horzcat(*[Dq * ca.repmat(Grep[:, r], 1, d) for r in range(nf)]))
+    hess, p = 0, 0
+    for a in range(d):
+        for b in range(a, d):
+            M = ca.mtimes(G.T, G * ca.repmat(Hp[p, :].T, 1, nf))
+            E = np.zeros((d, d))
+            E[a, b] = E[b, a] = 1.0
+            hess = hess + ca.kron(M, ca.DM(E))
+            p += 1
+    return g_of_x(Xw), ca.vertcat(*jac), hess
+
+
 def _lifted_derivatives(w: ca.MX, z_w: ca.MX, z: ca.MX, f_grad: ca.Function, f_hess: ca.Function,
-                        x_w: ca.MX, x: ca.MX, g: ca.MX) -> dict:
+                        constraints: tuple[ca.MX, ca.MX, ca.MX], lam_g: ca.MX) -> dict:
     """grad_f, jac_g and hess_lag for ``nlpsol`` through lifted variables.
 
     The objective is given as Functions of the symbol z (x, xd, xdd at the quadrature
     nodes: ``f_grad`` z -> (J, dJ/dz), ``f_hess`` z -> d2J/dz2, see
-    :func:`node_objective_functions`), with z = z_w = M_z w + c_z in the NLP; the
-    constraints g are an expression in the symbol x (x at the constraint grid),
-    x = x_w = M_g w + c_g. Each node's terms depend on its own 3d (objective) or d
-    (constraints) lifted values, so the Hessians and the Jacobian in z and x are block
-    diagonal and CasADi's colouring needs 3d and d directions instead of one per decision
-    variable. With the constant maps::
+    :func:`node_objective_functions`), with z = z_w = M_z w + c_z in the NLP. Each node's
+    terms depend on its own lifted values, so the Hessian in z is block diagonal and cheap;
+    with the constant map::
 
-        grad_f = M_z^T dJ/dz,  jac_g = dg/dx M_g,
-        hess_lag = lam_f M_z^T (d2J/dz2) M_z + M_g^T (d2 (lam_g . g)/dx2) M_g
+        grad_f = M_z^T dJ/dz,  hess_lag = lam_f M_z^T (d2J/dz2) M_z + d2 (lam_g . g)/dw2
+
+    ``constraints`` = (g, dg/dw, d2 (lam_g . g)/dw2) as expressions in w and the symbol
+    lam_g (:func:`_lifted_constraints` or :func:`_grid_constraints`).
     """
     Mz, _ = _affine(z_w, w)
-    Mg, cg = _affine(x_w, w)
-    lam_f, lam_g, p = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.shape[0]), ca.MX.sym("p", 0)
-    g_jac = ca.Function("lifted_jac_g", [x], [g, ca.jacobian(g, x)])
-    g_hess = ca.Function("lifted_hess_g", [x, lam_g], [ca.hessian(ca.dot(lam_g, g), x)[0]])
-    x_w = ca.mtimes(Mg, w) + cg
+    lam_f, p = ca.MX.sym("lam_f"), ca.MX.sym("p", 0)
     Jw, gzw = f_grad(z_w)
     Hzw = f_hess(z_w)
-    gw, Jxw = g_jac(x_w)
-    Hxw = g_hess(x_w, lam_g)
-    Mz_t, Mg_t = Mz.T, Mg.T
-    hess = lam_f * ca.mtimes([Mz_t, Hzw, Mz]) + ca.mtimes([Mg_t, Hxw, Mg])
+    gw, jac_w, hess_g = constraints
+    Mz_t = Mz.T
+    hess = lam_f * ca.mtimes([Mz_t, Hzw, Mz]) + hess_g
     return {
         "grad_f": ca.Function("grad_f", [w, p], [Jw, ca.mtimes(Mz_t, gzw)], ["x", "p"], ["f", "grad_f_x"]),
-        "jac_g": ca.Function("jac_g", [w, p], [gw, ca.mtimes(Jxw, Mg)],
-                             ["x", "p"], ["g", "jac_g_x"]),
+        "jac_g": ca.Function("jac_g", [w, p], [gw, jac_w], ["x", "p"], ["g", "jac_g_x"]),
         "hess_lag": ca.Function("hess_lag", [w, p, lam_f, lam_g], [ca.triu(ca.densify(hess))],
                                 ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
     }
@@ -299,7 +338,8 @@ def build_latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: TranscriptionSe
         ubg.append(np.tile(hi, Kg))
     g_x = ca.vertcat(*g_x)
     Xw = ca.mtimes(Pt, G0)
-    g = [ca.Function("grid_constraints", [Xs], [g_x])(Xw)]
+    grid_fn = ca.Function("grid_constraints", [Xs], [g_x])
+    g = [grid_fn(Xw)]
     tmax = torque_limit_vector(settings.torque_limits, model.nv)
     if tmax is not None:
         g.append(ca.vec(tau))
@@ -311,7 +351,12 @@ def build_latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: TranscriptionSe
         z = ca.vec(Zs)
         f_grad, f_hess = node_objective_functions(z, ca.vertcat(Qq, Vq, Aq), quad_w,
                                                   node_derivative_functions(model, jit=settings.jit))
-        derivatives = _lifted_derivatives(w, ca.vec(Zw), z, f_grad, f_hess, ca.vec(Xw), ca.vec(Xs), g_x)
+        lam_g = ca.MX.sym("lam_g", g_x.shape[0])
+        if settings.closed_form_grid:
+            rows = _grid_constraints(gpdm, spline.basis(grid_t)[:, free], Xw, grid_fn, settings.joint_limits, lam_g)
+        else:
+            rows = _lifted_constraints(w, ca.vec(Xw), ca.vec(Xs), g_x, lam_g)
+        derivatives = _lifted_derivatives(w, ca.vec(Zw), z, f_grad, f_hess, rows, lam_g)
         nlp["derivatives"] = derivatives
     return SplineNLP(spline=spline, free=free, P_init=P_init, nlp=nlp, derivatives=derivatives,
                      lbx=np.full(n, -np.inf), ubx=np.full(n, np.inf),

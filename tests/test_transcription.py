@@ -59,11 +59,15 @@ def test_constraint_rows_are_sigma2_and_q(setup):
     assert np.all(nlp.ubg[:K] == 0.05) and nlp.w0.size == 3 * 3
 
 
-def test_lifted_derivatives_match_automatic_ones(setup):
-    """The structured grad_f, jac_g and hess_lag (lifted to the quadrature/grid nodes) equal
-    CasADi's derivatives of the plain NLP expressions."""
+@pytest.mark.parametrize("closed_form,joint_limits,jit", [(True, True, True), (True, False, True),
+                                                         (False, True, True), (True, True, False)])
+def test_lifted_derivatives_match_automatic_ones(setup, closed_form, joint_limits, jit):
+    """The structured grad_f, jac_g and hess_lag (lifted to the quadrature/grid nodes, with the
+    closed-form grid derivatives or CasADi's, compiled node derivatives or SX) equal CasADi's
+    derivatives of the plain NLP expressions."""
     p, gp, t, sym = setup
-    st = TranscriptionSettings(duration=2.9, control_points=7, quadrature_points=4, constraint_points=6)
+    st = TranscriptionSettings(duration=2.9, control_points=7, quadrature_points=4, constraint_points=6,
+                               closed_form_grid=closed_form, joint_limits=joint_limits, jit=jit)
     nlp = build_latent_nlp(gp, sym, st, 0.05, t)
     der = nlp.nlp["derivatives"]
     assert der is nlp.derivatives and set(der) == {"grad_f", "jac_g", "hess_lag"}
