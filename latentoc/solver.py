@@ -59,17 +59,21 @@ def build_solver(nlp: dict, *, hessian: str = "exact", max_iter: int = 300, tol:
 
     ``nlp`` may also hold ``"derivatives"``: custom ``grad_f``, ``jac_g`` and ``hess_lag``
     Functions (e.g. :func:`latentoc.transcription.build_latent_nlp`'s lifted ones), passed
-    to ``nlpsol`` in place of the generated ones (``hess_lag`` only with the exact Hessian).
+    to ``nlpsol`` in place of the generated ones (``hess_lag`` only with the exact Hessian),
+    and ``"ipopt_options"``: Ipopt options the transcription recommends (e.g. scaling); the
+    arguments of this function take precedence.
     """
     if hessian not in HESSIANS:
         raise ValueError(f"hessian must be one of {HESSIANS}, got {hessian!r}")
     nlp = dict(nlp)
     derivatives = dict(nlp.pop("derivatives", None) or {})
+    recommended = dict(nlp.pop("ipopt_options", None) or {})
     if hessian != "exact":
         derivatives.pop("hess_lag", None)
     ipopt = {"max_iter": int(max_iter), "tol": float(tol), "print_level": 5 if verbose else 0,
              "sb": "yes", "mu_strategy": mu_strategy, "acceptable_tol": max(1e-6, 100 * float(tol)),
              "acceptable_iter": 10}
+    ipopt = {**recommended, **ipopt}  # the explicit arguments win
     if hessian == "lbfgs":
         ipopt["hessian_approximation"] = "limited-memory"
     options = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "expand": bool(expand), **derivatives}

@@ -117,3 +117,17 @@ def test_compiled_functions_fall_back_without_compiler(tmp_path, monkeypatch):
     assert not list(tmp_path.glob("lc_*.so")) and not list(tmp_path.glob(".build-*"))
     monkeypatch.setenv("LATENTOC_JIT", "0")
     assert solver.compiled_functions(fns) == fns
+
+
+def test_recommended_ipopt_options_are_passed():
+    """nlp["ipopt_options"] reaches Ipopt (an unknown option is rejected by it), the explicit
+    arguments win over it, and the caller's dict is kept."""
+    nlp = _nlp()
+    nlp["ipopt_options"] = {"max_iter": 1000, "nlp_scaling_constr_target_gradient": 1.0}
+    r = solve_nlp(build_solver(nlp, max_iter=2), np.array([-1.0, 1.0]), -np.inf * np.ones(2), np.inf * np.ones(2),
+                  [-np.inf], [1.0])
+    assert r.status == "Maximum_Iterations_Exceeded" and "ipopt_options" in nlp
+    nlp["ipopt_options"] = {"no_such_ipopt_option": 1.0}
+    with pytest.raises(RuntimeError):
+        s = build_solver(nlp)
+        solve_nlp(s, np.array([-1.0, 1.0]), -np.inf * np.ones(2), np.inf * np.ones(2), [-np.inf], [1.0])
