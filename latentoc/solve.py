@@ -208,9 +208,14 @@ def _finish(result: dict, nlp: SplineNLP, res, cost_initial: float, motion: dict
 def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None, latent_dim: int | None = None,
                             control_points: int | None = None, hessian: str | None = None,
                             method: str = "latent", joint_range_deg: float | None = None,
-                            gpdm: GPDM | None = None, verbose: bool = False) -> Solution:
+                            gpdm: GPDM | None = None, verbose: bool = False,
+                            initial_guess: np.ndarray | None = None) -> Solution:
     """Minimum-torque motion (L = |tau|^2) in the GPDM latent space or, with
-    ``method="joint-range"``, in the full configuration space (Sect. 4.1.1)."""
+    ``method="joint-range"``, in the full configuration space (Sect. 4.1.1).
+
+    ``initial_guess``: latent control points (m x d) Ipopt starts from instead of the
+    training fit (:func:`latentoc.sweep.sweep` passes the previous, smaller tube's optimum);
+    cost_initial and the gain still refer to the training fit."""
     m = problem.control_points if control_points is None else control_points
     hessian = problem.hessian if hessian is None else hessian
     _check_common(problem, m, hessian, method)
@@ -260,7 +265,10 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
     cost_fn = ca.Function("cost", [nlp.nlp["x"]], [nlp.nlp["f"]])
     cost_initial = float(cost_fn(nlp.w0))
     build_time = time.perf_counter() - t0
-    res = solve_nlp(solver, nlp.w0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg)
+    if initial_guess is not None and np.shape(initial_guess) != nlp.P_init.shape:
+        raise SolveError(f"initial guess has shape {np.shape(initial_guess)}, the control points {nlp.P_init.shape}")
+    x_start = nlp.w0 if initial_guess is None else np.asarray(initial_guess, dtype=float)[nlp.free].ravel()
+    res = solve_nlp(solver, x_start, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg)
 
     P = nlp.control_points(res.x)
     x, xd, xdd = (spline.evaluate(P, t, r) for r in (0, 1, 2))
@@ -276,7 +284,7 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
                    "max_sigma2": float(np.max(sigma2)),
                    "max_tube_violation": max(0.0, float(np.max(sigma2)) - delta),
                    "max_tube_violation_rel": max(0.0, float(np.max(sigma2)) - delta) / delta,
-                   "build_time_s": build_time, "gpdm_time_s": gpdm_time})
+                   "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
                   "x": x, "P": P, "P_initial": P0, "q_initial": init["q"], "sigma2": sigma2,

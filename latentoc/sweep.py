@@ -3,6 +3,13 @@
 :func:`sweep` solves the problem for each tube (latent) and, optionally, each joint
 range of the full-space baseline, reusing one learned GPDM; :func:`format_table`
 prints the rows like Table 2 (tube, cost, gain %, time | range, cost, gain %, time).
+
+Warm start (``warm_start=True``, default, latent-min-torque problems): a smaller tube's
+optimum is feasible for a larger one, so each tube starts Ipopt from the optimum of the
+largest smaller tube solved before it (in the given order), instead of the training fit.
+Measured on arm-raise (d = 3), tubes 1.5x ... 1000x in order: 267 -> 211 iterations in
+total (1.5x 34 -> 34, 5x 27 -> 22, 50x 24 -> 16, 1000x 44 -> 32), every optimum the same to
+5e-11 relative.
 """
 
 from __future__ import annotations
@@ -12,13 +19,13 @@ from typing import Any, Callable, Sequence
 
 from .problem import Problem
 from .results import atomic_write, write_json
-from .solve import problem_gpdm, solve
+from .solve import problem_gpdm, resolve_tube, solve, solve_latent_min_torque
 
 __all__ = ["sweep", "format_table", "write_sweep"]
 
 _FIELDS = ("method", "tube_spec", "tube", "tube_relative", "joint_range_deg", "latent_dim", "status", "success",
            "iterations", "cost_initial", "cost", "performance_gain_pct", "solve_time_s", "build_time_s",
-           "max_tube_violation", "quadrature_error")
+           "max_tube_violation", "quadrature_error", "warm_start")
 
 
 def _print_now(line: str) -> None:
@@ -27,13 +34,28 @@ def _print_now(line: str) -> None:
 
 def sweep(problem: Problem, tubes: Sequence[float | str], baseline_ranges: Sequence[float] | None = None,
           latent_dim: int | None = None, hessian: str | None = None,
-          progress: Callable[[str], None] | None = _print_now) -> list[dict[str, Any]]:
-    """One row per solve (latent for each tube, then joint-range for each range)."""
+          progress: Callable[[str], None] | None = _print_now, warm_start: bool = True) -> list[dict[str, Any]]:
+    """One row per solve (latent for each tube, then joint-range for each range); see the
+    module doc for ``warm_start``."""
     rows: list[dict[str, Any]] = []
     gp = problem_gpdm(problem, latent_dim)[0] if tubes else None
     total = len(tubes) + len(baseline_ranges or [])
+    warm = warm_start and problem.kind == "latent-min-torque"
+    solved: list[tuple[float, Any]] = []  # (delta, control points) of the successful latent solves
     for i, tube in enumerate(tubes):
-        r = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian).result
+        guess = None
+        if warm and solved:
+            delta = resolve_tube(tube, gp.tube_size())
+            smaller = [s for s in solved if s[0] <= delta]
+            guess = max(smaller, key=lambda s: s[0])[1] if smaller else None
+        if guess is None:
+            sol = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian)
+        else:
+            sol = solve_latent_min_torque(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian,
+                                          initial_guess=guess)
+        r = sol.result
+        if warm and r["success"]:
+            solved.append((r["tube"], sol.trajectory["P"]))
         rows.append({k: r.get(k) for k in _FIELDS})
         if progress:
             progress(f"[{i + 1}/{total}] tube {tube}: delta {r['tube']:.4g}, cost {r['cost']:.2f}, "

@@ -32,3 +32,18 @@ def test_table_and_files(rows, tmp_path):
     assert data["meta"]["problem"] == "arm-raise-small" and len(data["rows"]) == 2
     assert md.read_text().strip() == table.strip()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sweep.json", "sweep.md"]
+
+
+def test_warm_started_sweep_reaches_the_cold_optima():
+    """Each tube starts from the largest smaller tube's optimum (not from a larger one) and
+    reaches the same optimum as a cold start from the training fit."""
+    p = load_problem("arm-raise-small")
+    tubes = ["5x", "20x", "3x", "200x"]
+    warm = sweep(p, tubes, progress=None)
+    cold = sweep(p, tubes, progress=None, warm_start=False)
+    assert [r["warm_start"] for r in warm] == [False, True, False, True]
+    assert not any(r["warm_start"] for r in cold)
+    for w, c in zip(warm, cold):
+        assert w["success"] and c["success"] and w["tube"] == c["tube"]
+        assert abs(w["cost"] - c["cost"]) <= 1e-6 * c["cost"]
+        assert w["cost_initial"] == c["cost_initial"]
