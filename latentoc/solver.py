@@ -9,6 +9,8 @@ otherwise Ipopt is silent.
 "adaptive": latent tubes 1.2x-1000x 243 vs 330 iterations in total (1.5x/5x/50x: 39/57/24
 vs 59/70/37), same optima; joint range +-5/20/45/90 deg 20/31/29/43 vs 26/61/53/64
 iterations, same optima except +-90 deg (monotone finds a lower one, 213.2 vs 221.4).
+(Those counts predate the latent row scaling, :data:`latentoc.transcription.LATENT_IPOPT_OPTIONS`:
+now 1.5x/5x/50x take 34/27/24 iterations.)
 
 :func:`compiled_functions` turns SX Functions into C (``CodeGenerator``), compiles them
 with the system C compiler and loads them with ``casadi.external``. The shared library is

@@ -20,27 +20,37 @@ Constraints on an even grid of ``constraint_points`` per knot interval (the fixe
 points excluded): sigma^2(x(t_k)) <= delta (Eq. 29), joint limits on q(t_k) and, if
 given, |tau| <= torque limit at the quadrature nodes.
 
-Performance: q, v, a at all quadrature nodes as dense N x K MX matrix operations
-(:func:`latentoc.latent_motion.latent_motion_grid`, closed-form RBF derivatives), then one
-SX Function per node (q, v, a) -> (L, tau) (RNEA) applied with ``Function.map``; sigma^2 and
-q on the constraint grid as dense MX products (:func:`~latentoc.latent_motion.gp_grid_function`);
-the basis matrices are numeric constants. Measured on arm-raise (59 GPDM frames, 48
-quadrature nodes): the exact Hessian of the Lagrangian costs ~4x less per evaluation than
-with one SX Function per node through the GP mean (x, xd, xdd) -> (L, tau), whose N-term
-sums CasADi differentiates node by node (:func:`~latentoc.latent_motion.latent_node_function`,
-kept as the reference the tests check against).
+Performance (issue 5): q, v, a at all quadrature nodes as dense N x K MX matrix operations
+(:func:`latentoc.latent_motion.latent_motion_grid`, closed-form RBF derivatives); sigma^2
+and q on the constraint grid as dense MX products (:func:`~latentoc.latent_motion.gp_grid_function`);
+the basis matrices are numeric constants. ``grad_f``, ``jac_g`` and ``hess_lag`` go to
+``nlpsol`` as custom Functions (``structured_derivatives``, default on without torque limits,
+:func:`_lifted_derivatives`):
 
-Lifted derivatives (``structured_derivatives``, default on without torque limits): the
-objective is built as a Function of z = (x, xd, xdd) at the K quadrature nodes and the
-grid rows as a Function of x at the constraint grid, both affine in the decision vector w.
-Their Hessians (and the grid Jacobian) are block diagonal in z and x, so CasADi's colouring
-needs 3d (objective) and d (constraints) directions instead of one per variable of w
-(15 for arm-raise); ``grad_f``, ``jac_g`` and ``hess_lag`` go to ``nlpsol`` as custom
-Functions through the chain rule with the constant maps (:func:`_lifted_derivatives`).
-Measured on arm-raise at 5x (same iterates: 30 iterations, cost 661.089 both ways):
-Hessian of the Lagrangian 55 -> 25 ms per evaluation, constraint Jacobian 10.6 -> 2.8 ms,
-solve 2.5 -> 1.2 s CPU. Not worth it (measured): ``expand=True`` (SX graph; build 35 s and
-the Hessian 83 ms), one SX Hessian per node through the GP mean (62 ms for 48 nodes).
+* objective: a Function of the lifted z = (x, xd, xdd) at the K quadrature nodes, affine in
+  the decision vector w; per node, |tau|^2 with its gradient and 3n x 3n Hessian in
+  u = (q, v, a) is C code compiled once per robot and cached on disk (``jit``,
+  :func:`latentoc.latent_motion.node_derivative_functions`), and the chain rule through
+  u(z) (:func:`node_objective_functions`) is left to CasADi;
+* constraints: closed-form first and second derivatives of sigma^2 and mu_Q at the grid
+  points (``closed_form_grid``, :func:`latentoc.latent_motion.gp_grid_derivatives`),
+  assembled in w with the basis matrix (:func:`_grid_constraints`);
+* Ipopt scales the rows to a largest gradient of 1 (:data:`LATENT_IPOPT_OPTIONS`).
+
+Measured on arm-raise (d = 3, m = 9, 48 quadrature nodes, 191 grid points; CPU, 2 shared
+cores; ``python -m latentoc bench arm --reference``), per evaluation, before (CasADi's
+derivatives of the lifted Functions in its virtual machine) -> now: Hessian of the
+Lagrangian 21 -> 7.8 ms, constraint Jacobian 2.4 -> 1.7 ms, objective gradient 1.5 -> 0.5 ms;
+iterations 1x/5x/50x 151/57/24 -> 114/27/24; solve 6.8/2.5/1.45 -> 2.3/0.48/0.44 s CPU (5x: 1.84
+-> 0.48 s); build 0.2 s (first build on a machine: +22 s compiling the node derivatives).
+Every optimum the same to 1e-10 relative. The joint-range baseline, given the same compiled
+node derivatives, solves in 0.17-0.26 s (+-20/60 deg; 1.5-2.2 s before): it has no GP and
+linear constraints, so per evaluation the latent NLP stays ~7x dearer (GP mean with its
+second derivatives, 1528 nonlinear rows) and Ipopt needs ~2x its time per iteration.
+Not worth it (measured): ``expand=True`` (SX graph; build 35 s and the Hessian 83 ms); one
+SX Hessian per node through the GP mean (62 ms for 48 nodes); compiling the whole MX
+hess_lag to C (5 MB of C, gcc -O1 100 s, no faster than the VM: the time is in dense
+products); splitting the node Hessian into 3 or 21 C functions (gcc -O1 still 14-16 s).
 """
 
 from __future__ import annotations
@@ -52,7 +62,8 @@ import numpy as np
 
 from .dynamics import SymbolicModel
 from .gpdm import GPDM
-from .latent_motion import gp_grid_derivatives, gp_grid_function, joint_node_function, latent_motion_grid, node_derivative_functions
+from .latent_motion import (gp_grid_derivatives, gp_grid_function, joint_node_function, latent_motion_grid,
+                            node_derivative_functions)
 from .spline import BSpline
 
 __all__ = ["SplineNLP", "TranscriptionSettings", "build_latent_nlp", "fixed_rows", "node_objective_functions",
