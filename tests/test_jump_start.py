@@ -5,26 +5,24 @@ from latentoc.jump.problem import consistent_start, initial_guess, setup
 from latentoc.jump.transcription import JumpSettings, build_nlp
 
 
-def test_consistent_start_repairs_continuity_and_forces():
+def test_consistent_start_fits_nonnegative_forces():
     js = setup()
     s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     names = np.array(nlp.names)
     x = consistent_start(nlp, nlp.x0)
     g0, g1 = (np.array(nlp.meta["g_fun"](v)).ravel() for v in (nlp.x0, x))
-    for kind in ("takeoff_position", "takeoff_velocity", "touchdown_position"):
-        assert np.abs(g1[names == kind]).max() < 1e-9 < np.abs(g0[names == kind]).max()
     a, b = nlp.meta["sizes"]["lam"]
     assert np.all(x[a:b] >= 0)
-    # stance/landing force residual no worse than the uniform guess at every contact node
+    # the base-row residual of every contact node is no worse than with the uniform guess
     d0, d1 = (np.abs(g[names == "dynamics"]).reshape(-1, 3) for g in (g0, g1))
-    nS, nF = 5, 5
-    contact = list(range(nS)) + list(range(nS + nF, d0.shape[0]))
-    assert np.all(np.linalg.norm(d1[contact], axis=1) <= np.linalg.norm(d0[contact], axis=1) + 1e-9)
+    assert d0.shape[0] == 5 + 6
+    assert np.all(np.linalg.norm(d1, axis=1) <= np.linalg.norm(d0, axis=1) + 1e-9)
+    assert np.linalg.norm(d1) < np.linalg.norm(d0)
 
 
 def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
-    """The refitted phi_s removes the (12, -4, 12) takeoff velocity of the toe-pinned start."""
+    """The refitted phi_s gives the toe-pinned start the captured takeoff velocity (x, z, pitch)."""
     from latentoc.jump.transcription import anchored_function
     from latentoc.spline import BSpline
 
@@ -39,5 +37,8 @@ def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
         f = [BSpline(s.n_phi_stance, ph.takeoff).evaluate(ig["phi_s"][:, None], tt, k)[:, 0][None] for k in range(3)]
         return np.array(anch(X[0].T, X[1].T, X[2].T, *f, 0.0)[1]).ravel()
 
+    tr = js.training
+    captured = np.gradient(tr.base, tr.t, axis=0)[int(np.argmin(np.abs(tr.t - ph.takeoff)))]
     raw, fitted = takeoff_velocity(initial_guess(js, s, fit_base=False)), takeoff_velocity(initial_guess(js, s))
-    assert np.linalg.norm(raw) > 5.0 and np.linalg.norm(fitted) < 1.0
+    assert np.linalg.norm(raw - captured) > 1.0
+    assert np.all(np.abs(fitted - captured) < [0.1, 0.15, 0.1])

@@ -54,7 +54,7 @@ def _foot_pitch(model, Q, geom) -> tuple[np.ndarray, np.ndarray]:
     return phi, bx
 
 
-def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 11, torque_margin: float = 0.1,
+def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, torque_margin: float = 0.1,
           gpdm_settings: GPDMSettings | None = None) -> JumpSetup:
     """Everything the NLP needs, from the training data."""
     model, smap = jump_model()
@@ -75,7 +75,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 11, tor
 
 
 def initial_guess(js: JumpSetup, s: JumpSettings, fit_base: bool = True) -> dict:
-    """Spline fits of the training foot pitch and flight base.
+    """Spline fits of the training foot pitch (the flight base follows from the takeoff state).
 
     With ``fit_base`` the foot-pitch splines are then refitted so that the toe-pinned base
     follows the captured base (:func:`fit_anchored_base`).
@@ -83,15 +83,12 @@ def initial_guess(js: JumpSetup, s: JumpSettings, fit_base: bool = True) -> dict
     t, ph = js.init["t"], js.phases
     st = t <= ph.takeoff + 1e-9
     la = t >= ph.touchdown - 1e-9
-    fl = (t >= ph.takeoff - 1e-9) & (t <= ph.touchdown + 1e-9)
     phi_s = BSpline(s.n_phi_stance, ph.takeoff).fit(t[st], np.maximum(js.init["phi"][st], 0), fix_ends=False)[:, 0]
     phi_l = BSpline(s.n_phi_land, ph.duration - ph.touchdown).fit(t[la] - ph.touchdown, np.maximum(js.init["phi"][la], 0),
                                                                  fix_ends=False)[:, 0]
-    fb = BSpline(s.n_flight + 2, ph.touchdown - ph.takeoff).fit(np.clip(t[fl] - ph.takeoff, 0, None), js.init["base"][fl],
-                                                              fix_ends=False)
     if fit_base:
         phi_s, phi_l = fit_anchored_base(js, s, phi_s, phi_l)
-    return {"P": js.init["P"], "phi_s": phi_s, "phi_l": phi_l, "flight": fb, "x_L": js.init["x_L"]}
+    return {"P": js.init["P"], "phi_s": phi_s, "phi_l": phi_l, "x_L": js.init["x_L"]}
 
 
 def fit_anchored_base(js: JumpSetup, s: JumpSettings, phi_s: np.ndarray, phi_l: np.ndarray,
@@ -140,41 +137,24 @@ def fit_anchored_base(js: JumpSetup, s: JumpSettings, phi_s: np.ndarray, phi_l: 
 def consistent_start(nlp, x0: np.ndarray) -> np.ndarray:
     """Make the training initial guess consistent with the NLP's equality constraints.
 
-    The GPDM-mean motion with the anchored base is not the captured one, so the raw guess
-    violates the base rows by up to ~25 body weights (measured, nodes 10/9/14) and the
-    takeoff velocity by ~12 (rad/s).  Two cheap, linear repairs:
-
-    * flight base: add a cubic Hermite correction so that it starts at the stance base's
-      takeoff position and velocity and ends at the landing base's touchdown position;
-    * contact forces: per contact node, the generator weights lam >= 0 that best match the
-      node's sagittal base rows (non-negative least squares; the rows are affine in lam).
+    The contact forces of the guess are uniform; per contact node, this sets the generator
+    weights lam >= 0 that best match the node's sagittal base rows (non-negative least
+    squares; the rows are affine in lam).
     """
     from scipy.optimize import nnls
 
     g_fun, sizes, names = nlp.meta["g_fun"], nlp.meta["sizes"], np.array(nlp.names)
-    spf = nlp.meta["splines"][3]
     x = np.array(x0, float).copy()
 
     def g(v):
         return np.array(g_fun(v)).ravel()
 
-    g0 = g(x)
-    r0, rv, rt = g0[names == "takeoff_position"], g0[names == "takeoff_velocity"], g0[names == "touchdown_position"]
-    T = spf.duration
-    tt = np.linspace(0.0, T, 200)
-    sx = tt / T
-    h00, h10, h01 = 2 * sx**3 - 3 * sx**2 + 1, (sx**3 - 2 * sx**2 + sx) * T, -2 * sx**3 + 3 * sx**2
-    corr = -(np.outer(h00, r0) + np.outer(h10, rv) + np.outer(h01, rt))
-    a, b = sizes["flight"]
-    C = x[a:b].reshape(-1, 3, order="F") + spf.fit(tt, corr, fix_ends=False)
-    x[a:b] = C.ravel(order="F")
     # contact forces: dynamics rows = c + A lam, node by node (3 rows, 6 generators)
     a, b = sizes["lam"]
     x[a:b] = 0.0
     dyn = names == "dynamics"
-    c = g(x)[dyn].reshape(-1, 3)
-    nS, nF = len(nlp.meta["grid"]["stance"]), len(nlp.meta["grid"]["flight"])
-    cols = list(range(nS)) + list(range(nS + nF, c.shape[0]))
+    c = g(x)[dyn].reshape(-1, 3)  # contact nodes only
+    cols = list(range(c.shape[0]))
     A = np.zeros((c.shape[0], 3, 6))
     for k in range(6):
         xk = x.copy()
@@ -208,7 +188,7 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
         w1 = np.array(sol1["x"]).ravel()
         phase1 = {"status": st1["return_status"], "success": bool(st1["success"]), "iterations": int(st1["iter_count"]),
                   "time_s": time.perf_counter() - t0, "max_constraint_violation": float(v1.max()),
-                  "distance": float(np.array(nlp.unpack(w1)[4]).ravel()[0])}
+                  "distance": float(np.array(nlp.unpack(w1)[3]).ravel()[0])}
         start = w1
     t1 = time.perf_counter()
     sol = nlp.solver(x0=start, p=1.0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
@@ -246,7 +226,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
 
     s, parts, nlp = out["settings"], out["parts"], out["nlp"]
     ph = js.phases
-    sp, sps, spl, spf = nlp.meta["splines"]
+    sp, sps, spl = nlp.meta["splines"]
     P = parts["P"]
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
     X, Xd, Xdd = (sp.evaluate(P, t, k) for k in range(3))
@@ -268,9 +248,18 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
         phi[k, la] = spl.evaluate(parts["phi_l"], np.clip(t[la] - ph.touchdown, 0, spl.duration), k)[:, 0]
     xpin = np.where(la, float(parts["x_L"].ravel()[0]), 0.0)
     B = [np.array(v).T for v in anch(X.T, Xd.T, Xdd.T, phi[0][None], phi[1][None], phi[2][None], xpin[None])]
-    tf = np.clip(t[fl] - ph.takeoff, 0, spf.duration)
+    # flight: ballistic from the takeoff state, pitch rate integrated on the 1 kHz grid
+    from .flight import ballistic_base, flight_functions
+    t_to = np.array([ph.takeoff])
+    x_to = [sp.evaluate(P, t_to, k) for k in range(3)]
+    f_to = [sps.evaluate(parts["phi_s"], t_to, k)[:, 0][None] for k in range(3)]
+    b_to = [np.array(v).ravel() for v in anchored_function(js.sym, js.smap, gp, js.geom)(
+        x_to[0].T, x_to[1].T, x_to[2].T, *f_to, 0.0)]
+    tau = np.concatenate([[0.0], t[fl] - ph.takeoff])
+    Xf = [np.vstack([x_to[k], (X, Xd, Xdd)[k][fl]]).T for k in range(3)]
+    bb = ballistic_base(flight_functions(js.sym, js.smap, gp), *Xf, tau, b_to[0], b_to[1], Xf[0][:, 0], Xf[1][:, 0])
     for k in range(3):
-        B[k][fl] = spf.evaluate(parts["flight"], tf, k)
+        B[k][fl] = np.array(bb[k]).T[1:]
     q7, v6, a6 = base_to_freeflyer(*B)
     E = joint_embedding(js.smap)
     Q, V, A = np.column_stack([q7, Y @ E.T]), np.column_stack([v6, Yd @ E.T]), np.column_stack([a6, Ydd @ E.T])
