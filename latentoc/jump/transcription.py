@@ -6,14 +6,13 @@ Decision variables
   points stay on the training path, Sect. 4.2 "boundary conditions");
 * the foot pitch splines phi_s (stance) and phi_l (landing) of the toe-pinned anchoring
   (:mod:`.contact`) and the landing toe position x_L;
-* the flight base spline (x, z, pitch), ``n_flight + 2`` control points per coordinate;
 * contact force generator weights (6 per contact node) and the touchdown impulse (6).
 
 Joint motion: y = mu_Q(x(t)) (GPDM mean, Eq. 18), y' and y'' by the chain rule
 (Eq. 26-28); the right side is the mirror image.  Base: anchored in stance and landing,
-ballistic in flight (forward "hybrid dynamics" as in the paper, written as collocation:
-the base rows of RNEA equal sum J^T f at every node, f = 0 in flight, a square system for
-the flight spline given the takeoff position and velocity).
+ballistic in flight (the paper's forward "hybrid dynamics", integrated in closed form from
+the takeoff state, :mod:`.flight`); in contact the base rows of RNEA equal sum J^T f at
+every node.  The touchdown position of the flight must meet the landing's pinned toe.
 
 Impact at touchdown: perfectly inelastic for the feet (restitution 0): the toe tip stops
 (anchoring), the joints keep their (prescribed, continuous) velocities, and the base
@@ -30,65 +29,29 @@ ground penetration in flight, ZMP in the support polygon over the landing and th
 COM in it once the landing has settled (Eq. 35, 36).
 Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
 
-Status and known limits (measured, issue 6 report):
+Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): no base variables, and
+the base rows hold at every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with
+the collocated base spline it replaced).  Contact phases: the base rows, cone, CoP, torque
+limits and complementarity hold at the nodes; between nodes the exported motion is checked
+by :mod:`.verify` with the wrench the motion needs.
 
-* with ``torque_limits``, ``polygon`` and ``complementarity`` all on, Ipopt stops at a point
-  of local infeasibility (tube 1.0); the problem file switches them off by default;
-* constraints hold at the nodes only: the 1 kHz check (:mod:`.verify`) finds base-wrench
-  residuals of several body weights between the landing nodes (the latent path runs
-  fast through regions where the GPDM mean bends), so the node count or an
-  inter-node (e.g. collocation-interval) constraint must grow before the numbers can be
-  trusted (tube 0.5: nodes 10/9/14 give 0.862 m with a 1 kHz residual of 10.6 body
-  weights; nodes 20/15/40 give 0.470 m with 0.42 body weights and friction ratio 0.53);
-* solves take minutes with L-BFGS (target 20 s): the Jacobian of the 62-DOF RNEA through
-  the GPDM mean's second derivatives costs ~0.4 s per evaluation.
+Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
 
-Two-phase solve (``JumpSettings.two_phase``; parameter ``p`` of the NLP weights the
-objective: p = 0 phase 1, the squared deviation of the free latent control points from the
-training fit, p = 1 phase 2, the distance), measured 2026-11-23 on 2 loaded cores, nodes
-10/9/14, L-BFGS, torque_margin 0.1 unless stated, all hard constraints on:
-
-* the training guess violates the base rows by up to 25 body weights at the nodes (takeoff
-  and touchdown nodes; the GPDM-mean motion with the toe-pinned base is not the captured
-  motion) and the takeoff velocity by 12; :func:`latentoc.jump.problem.consistent_start`
-  repairs the continuity rows exactly and fits the node forces by NNLS, but the base rows
-  stay at up to 24 body weights (the needed forces leave the friction cone / pull);
-* tube 0.02, raw start: phase 1 stops at 400 iterations with violation 0.25, phase 2 then
-  "infeasible problem detected" (violation 0.055, takeoff position; tube 0.0033 over);
-* tube 0.1 / 0.5 with the consistent start: phase 1 at 372 / 400 iterations still at
-  primal infeasibility 0.07 / 0.013 (0.5 ends in restoration);
-* at the tube-0.02 end point above the torque (margin 0.1) and polygon rows hold at the nodes;
-  the violated ones are the tube, takeoff continuity and the heel/ball complementarity, so
-  widening the torque limits alone (margin 0.3 tried, tube 0.02: inf_pr still 12 after 43
-  iterations, stopped) does not make the problem feasible;
-* with the three switches off (tube 0.02): phase 1 converges (262 iterations, violation
-  5e-9) to a point whose jump is only 0.153 m, phase 2 (117 iterations) reaches 0.432 m
-  (one-phase: 0.450 m, 212 iterations); 430 s wall, 177 s CPU on the loaded machine; the
-  1 kHz check is as bad as before (base residual 5.5 body weights, friction ratio 62);
-* why the nearest feasible point jumps so short: the initial guess's toe-pinned stance
-  base leaves with (xd, zd, pitch rate) = (12.1, -3.8, 11.8) at takeoff (the 5-point foot
-  pitch spline phi_s fitted to the heel rise ends steeply), against (1.07, 1.41, -0.32)
-  of the captured flight; the takeoff state, not the torque limits, is what is far from
-  consistent.  More phi_s points do not cure it (8 or 12 points: (-4.0, 0.7, -4.3)), so
-  the GPDM-mean joint velocities (11-point latent spline) with a pinned toe are themselves
-  off at takeoff.
-* repaired start (:func:`latentoc.jump.problem.fit_anchored_base`, default since): phi_s
-  (now 8 points) and phi_l are least-squares fitted so that the toe-pinned base follows the
-  captured base pose over the stance / landing frames plus 0.3 x the velocity mismatch at
-  takeoff / just after touchdown.  Anchored takeoff velocity (12.1, -3.8, 11.8) ->
-  (0.25, -0.02, -0.15); largest node base residual (nodes 10/9/14, switches off, tube 0.02)
-  raw 25.5 -> 16.6 body weights, after ``consistent_start`` 23.7 -> 13.1 (stance 20.3 -> 10.9,
-  flight 15.1 -> 1.8, landing 23.7 -> 13.1, the touchdown node).  The captured takeoff
-  velocity (0.98, 1.38, -0.73) is not reachable with a pinned toe: the captured toe tip
-  leaves the ground at about 0.317 s and at the detected takeoff (0.35 s) is already 2.2 cm
-  up moving at (1.34, 1.39) m/s, so relative to the toe the captured base has about zero
-  vertical velocity there.  Solves from the repaired start (tube 0.02, two-phase, L-BFGS,
-  2 loaded cores): switches off: phase 1 converges in 129 iterations (was 262) at 0.132 m,
-  phase 2 in 197 iterations at 0.553 m (was 0.432 m), 254 s wall; switches on: phase 1 stops
-  at 300 iterations with violation 0.034 (was 0.25 at 400) and phase 2 ends in "infeasible
-  problem detected" (violation 0.0072: takeoff position, tube 0.0012, ball complementarity),
-  so the switches stay off.  Next: an earlier takeoff time (toe-tip lift-off) or an unpinned
-  toe over the last stance interval.
+* takeoff at the feet's lift (0.350 s) and m = 11: with all hard constraints on, phase 1 ends
+  infeasible.  Two causes, both measured: the toe tip leaves the ground at 0.308 s (now the
+  takeoff, :mod:`.phases`), and an 11-point latent spline smooths the push-off, so the
+  toe-pinned takeoff has 1.26 m/s of vertical velocity against the captured 1.84 (m = 15:
+  1.64, m = 21: 1.96); simulated ballistically, that flight lands the toe 25 cm below the
+  ground at touchdown, against 1.5 cm with m = 21;
+* m = 21, toe-off takeoff, collocated flight spline, nodes 12/12/18, all constraints on:
+  phase 1 and phase 2 both converge (192 + 255 iterations, 256 s), distance 0.661 m (training
+  0.732 m).  The 1 kHz check then showed the flight residual (0.48 body weights, now removed by
+  the ballistic flight) and, between contact nodes, a needed wrench whose centre of pressure
+  leaves the foot (torque-limit excess up to 380 N m at the toe joint, fz < 0 at one sample):
+  the node constraints need a denser grid or inter-node constraints;
+* ballistic flight and the tube on a 5 ms grid (this version): about 3 s of CPU per Ipopt
+  iteration at nodes 12/12/18 (5 iterations per phase: 34 s), against about 0.6 s before;
+  where the time goes is not yet profiled.
 """
 from __future__ import annotations
 
