@@ -7,7 +7,7 @@ import pytest
 
 from latentoc.jump.contact import FootGeometry
 from latentoc.jump.training import jump_model, training_jumps
-from latentoc.jump.verify import verify
+from latentoc.jump.verify import sagittal_contact_wrench, verify
 
 
 def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
@@ -38,6 +38,23 @@ def test_static_stance_is_verified():
     assert r["max_friction_ratio"] < 0.4
     assert r["max_torque_violation"] == 0.0 and r["max_symmetric_torque"] < 1e-6
     assert r["zmp_margin"] > 0 and r["com_margin"] > 0 and np.isclose(r["zmp_margin"], r["com_margin"])
+
+
+def test_sagittal_contact_wrench_balances_the_base_rows():
+    model, _ = jump_model()
+    q = training_jumps()[0].Q[40]  # a symmetric pose of the push-off, not at rest
+    rng = np.random.default_rng(3)
+    d = model.createData()
+    v, a = 0.3 * rng.standard_normal(model.nv), rng.standard_normal(model.nv)
+    v[[1, 3, 5]] = a[[1, 3, 5]] = 0.0  # sagittal base motion
+    v[6:], a[6:] = 0.0, 0.0
+    tau = pin.rnea(model, d, q, v, a)
+    pin.computeJointJacobians(model, d, q)
+    pin.framesForwardKinematics(model, d, q)
+    J = sum(pin.getFrameJacobian(model, d, model.getFrameId(f), pin.LOCAL_WORLD_ALIGNED) for f in ("ltoes_end", "rtoes_end"))
+    w = sagittal_contact_wrench(J, tau)
+    assert np.allclose((J.T @ w)[:6], tau[:6], atol=1e-9 * np.abs(tau[:6]).max())
+    assert np.all(w[[1, 3, 5]] == 0.0)
 
 
 def test_wrong_wrench_is_caught():

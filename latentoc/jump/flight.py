@@ -24,16 +24,13 @@ import numpy as np
 
 from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
+from .base import _ry
 from .contact import joint_embedding
 
 GRAVITY = np.array([0.0, -9.81])  # (x, z)
 
 
-def _ry(p):
-    c, s = ca.cos(p), ca.sin(p)
-    return ca.vertcat(ca.horzcat(c, 0, s), ca.horzcat(0, 1, 0), ca.horzcat(-s, 0, c))
-
-
+@lru_cache(maxsize=4)
 def flight_functions(sym: SymbolicModel, smap, gpdm: GPDM) -> dict[str, ca.Function]:
     """casadi Functions of the ballistic flight (see module doc).
 
@@ -41,12 +38,9 @@ def flight_functions(sym: SymbolicModel, smap, gpdm: GPDM) -> dict[str, ca.Funct
       angular momentum about the COM (y) of a state;
     * ``pitch_rate(x, xd, xdd, L) -> (pd, pdd)`` from ``L = I pd + h``;
     * ``base(x, xd, xdd, p, pd, pdd, c, cd, cdd) -> (b, bd, bdd)`` of the sagittal base.
+
+    Cached per (sym, smap, gpdm) objects: the NLP and the 1 kHz export share them.
     """
-    return _functions(id(sym), id(smap), id(gpdm), sym, smap, gpdm)
-
-
-@lru_cache(maxsize=4)
-def _functions(_a, _b, _c, sym, smap, gpdm) -> dict[str, ca.Function]:
     d = gpdm.latent_dim
     x, xd, xdd = (ca.SX.sym(n, d) for n in ("x", "xd", "xdd"))
     E = ca.DM(joint_embedding(smap))

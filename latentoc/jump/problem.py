@@ -153,16 +153,13 @@ def consistent_start(nlp, x0: np.ndarray) -> np.ndarray:
     a, b = sizes["lam"]
     x[a:b] = 0.0
     dyn = names == "dynamics"
-    c = g(x)[dyn].reshape(-1, 3)  # contact nodes only
-    cols = list(range(c.shape[0]))
+    c = g(x)[dyn].reshape(-1, 3)  # one row per contact node
     A = np.zeros((c.shape[0], 3, 6))
     for k in range(6):
         xk = x.copy()
         xk[a + k:b:6] = 1.0
         A[:, :, k] = g(xk)[dyn].reshape(-1, 3) - c
-    lam = np.zeros((6, len(cols)))
-    for j, col in enumerate(cols):
-        lam[:, j] = nnls(A[col], -c[col])[0]
+    lam = np.column_stack([nnls(A[j], -c[j])[0] for j in range(c.shape[0])])
     x[a:b] = lam.ravel(order="F")
     return x
 
@@ -239,7 +236,8 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     ydd = ca.jtimes(y, x, xdd) + ca.jtimes(yd, x, xd)
     fy = ca.Function("y", [x, xd, xdd], [y, yd, ydd, gp.variance_function()(x)]).map(len(t))
     Y, Yd, Ydd, S2 = (np.array(v).T for v in fy(X.T, Xd.T, Xdd.T))
-    anch = anchored_function(js.sym, js.smap, gp, js.geom).map(len(t))
+    anch_fn = anchored_function(js.sym, js.smap, gp, js.geom)
+    anch = anch_fn.map(len(t))
     st, fl = t <= ph.takeoff, (t > ph.takeoff) & (t < ph.touchdown)
     la = t >= ph.touchdown
     phi = np.zeros((3, len(t)))
@@ -253,8 +251,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     t_to = np.array([ph.takeoff])
     x_to = [sp.evaluate(P, t_to, k) for k in range(3)]
     f_to = [sps.evaluate(parts["phi_s"], t_to, k)[:, 0][None] for k in range(3)]
-    b_to = [np.array(v).ravel() for v in anchored_function(js.sym, js.smap, gp, js.geom)(
-        x_to[0].T, x_to[1].T, x_to[2].T, *f_to, 0.0)]
+    b_to = [np.array(v).ravel() for v in anch_fn(x_to[0].T, x_to[1].T, x_to[2].T, *f_to, 0.0)]
     tau = np.concatenate([[0.0], t[fl] - ph.takeoff])
     Xf = [np.vstack([x_to[k], (X, Xd, Xdd)[k][fl]]).T for k in range(3)]
     bb = ballistic_base(flight_functions(js.sym, js.smap, gp), *Xf, tau, b_to[0], b_to[1], Xf[0][:, 0], Xf[1][:, 0])
@@ -263,7 +260,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     q7, v6, a6 = base_to_freeflyer(*B)
     E = joint_embedding(js.smap)
     Q, V, A = np.column_stack([q7, Y @ E.T]), np.column_stack([v6, Yd @ E.T]), np.column_stack([a6, Ydd @ E.T])
-    # contact wrench per foot (world-aligned at the toe tip): node values, linear in time within a phase
+    # the NLP's contact wrench per foot at its nodes (world-aligned at the toe tip), from the generators
     grid = nlp.meta["grid"]
     mass = nlp.meta["mass"]
     W = mass * 9.81
@@ -296,7 +293,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     # that verify() checks its cone, unilaterality and centre of pressure between the nodes;
     # the node wrenches of the NLP (from its force generators) are exported as node_wrench
     tau = np.zeros((len(t), js.model.nv - 6))
-    rows = [0, 2, 4]
+    from .verify import sagittal_contact_wrench
     ids = [js.model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")]
     for i in range(len(t)):
         full = pin.rnea(js.model, d, Q[i], V[i], A[i])
@@ -304,7 +301,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
             pin.computeJointJacobians(js.model, d, Q[i])
             pin.updateFramePlacements(js.model, d)
             J = sum(pin.getFrameJacobian(js.model, d, f, pin.LOCAL_WORLD_ALIGNED) for f in ids)
-            wrench[i, rows] = np.linalg.solve(J.T[np.ix_(rows, rows)], full[rows])
+            wrench[i] = sagittal_contact_wrench(J, full)
             full = full - J.T @ wrench[i]
         tau[i] = full[6:]
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "contact": (st | la).astype(np.int8),

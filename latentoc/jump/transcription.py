@@ -222,7 +222,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     Lall = W * ca.horzcat(Lam[:, :nS], ca.DM.zeros(6, nF), Lam[:, nS:])  # Lam in body weights
     N = nS + nF + nL
     out = node.map(N)(Xall[0], Xall[1], Xall[2], Ball[0], Ball[1], Ball[2], Lall)
-    res, tau, Pp, com, dh, sig = out[:6]
+    res, tau, Pp, com, dh = out[:5]
 
     g, lbg, ubg, names = [], [], [], []
 
