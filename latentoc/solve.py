@@ -115,11 +115,16 @@ def solver_for(kind: str) -> Callable[..., Solution]:
 
 def solve(problem: Problem, *, tube: float | str | None = None, latent_dim: int | None = None,
           control_points: int | None = None, hessian: str | None = None, method: str = "latent",
-          joint_range_deg: float | None = None, gpdm: GPDM | None = None, verbose: bool = False) -> Solution:
-    """Solve ``problem`` with optional overrides of its declared parameters (see module doc)."""
+          joint_range_deg: float | None = None, gpdm: GPDM | None = None, verbose: bool = False,
+          initial_guess: np.ndarray | None = None) -> Solution:
+    """Solve ``problem`` with optional overrides of its declared parameters (see module doc).
+
+    ``initial_guess`` (a warm start) is passed on only when given, so solvers of kinds that
+    take none (the broad jump) keep their signature."""
+    extra = {} if initial_guess is None else {"initial_guess": initial_guess}
     return solver_for(problem.kind)(problem, tube=tube, latent_dim=latent_dim, control_points=control_points,
                                     hessian=hessian, method=method, joint_range_deg=joint_range_deg,
-                                    gpdm=gpdm, verbose=verbose)
+                                    gpdm=gpdm, verbose=verbose, **extra)
 
 
 # ---------------------------------------------------------------- GPDM cache

@@ -19,7 +19,7 @@ from typing import Any, Callable, Sequence
 
 from .problem import Problem
 from .results import atomic_write, write_json
-from .solve import problem_gpdm, resolve_tube, solve, solve_latent_min_torque
+from .solve import problem_gpdm, resolve_tube, solve
 
 __all__ = ["sweep", "format_table", "write_sweep"]
 
@@ -48,11 +48,7 @@ def sweep(problem: Problem, tubes: Sequence[float | str], baseline_ranges: Seque
             delta = resolve_tube(tube, gp.tube_size())
             smaller = [s for s in solved if s[0] <= delta]
             guess = max(smaller, key=lambda s: s[0])[1] if smaller else None
-        if guess is None:
-            sol = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian)
-        else:
-            sol = solve_latent_min_torque(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian,
-                                          initial_guess=guess)
+        sol = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian, initial_guess=guess)
         r = sol.result
         if warm and r["success"]:
             solved.append((r["tube"], sol.trajectory["P"]))
