@@ -24,6 +24,7 @@ SX Functions are returned unchanged (with a warning when the compiler is missing
 from __future__ import annotations
 
 import hashlib
+from concurrent.futures import ThreadPoolExecutor
 import os
 import shutil
 import subprocess
@@ -119,20 +120,34 @@ def compiled_functions(functions: list[ca.Function], flags: tuple[str, ...] = JI
     second call with the same Functions loads the library without compiling. Falls back to
     the given Functions if ``LATENTOC_JIT=0``, or (warning) if there is no C compiler or it fails.
     """
+    return compiled_function_groups([functions], flags)[0]
+
+
+def compiled_function_groups(groups: list[list[ca.Function]], flags: tuple[str, ...] = JIT_FLAGS,
+                             workers: int = 2, external_options: dict | None = None) -> list[list[ca.Function]]:
+    """:func:`compiled_functions` for several groups, one library each: the C sources are
+    generated one after the other (CasADi's code generator is not safe to run from several
+    threads: concurrent runs gave different sources), the libraries compiled ``workers`` at a time.
+    ``external_options`` go to ``casadi.external`` (e.g. ``enable_fd`` for derivatives)."""
     if os.environ.get("LATENTOC_JIT", "1") == "0":
-        return list(functions)
+        return [list(g) for g in groups]
     cc = _compiler()
     if cc is None:
         warnings.warn("no C compiler found (set CC): evaluating the NLP Functions without JIT", stacklevel=2)
-        return list(functions)
-    gen = ca.CodeGenerator("latentoc_jit.c", {"with_header": False})
-    for f in functions:
-        gen.add(f)
-    source = gen.dump()
-    key = hashlib.sha256("\0".join([source, cc, *flags, ca.__version__]).encode()).hexdigest()[:24]
-    cache = jit_cache_dir()
-    lib = cache / f"lc_{key}.so"
-    if not lib.exists():
+        return [list(g) for g in groups]
+    sources = []
+    for functions in groups:
+        gen = ca.CodeGenerator("latentoc_jit.c", {"with_header": False})
+        for f in functions:
+            gen.add(f)
+        sources.append(gen.dump())
+
+    def build(source: str) -> Path | None:
+        key = hashlib.sha256("\0".join([source, cc, *flags, ca.__version__]).encode()).hexdigest()[:24]
+        cache = jit_cache_dir()
+        lib = cache / f"lc_{key}.so"
+        if lib.exists():
+            return lib
         try:
             cache.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
@@ -144,6 +159,11 @@ def compiled_functions(functions: list[ca.Function], flags: tuple[str, ...] = JI
         except (OSError, subprocess.CalledProcessError) as exc:
             detail = getattr(exc, "stderr", "") or str(exc)
             warnings.warn(f"compiling the NLP Functions failed ({detail.strip()[:200]}): evaluating without JIT",
-                          stacklevel=2)
-            return list(functions)
-    return [ca.external(f.name(), str(lib)) for f in functions]
+                          stacklevel=3)
+            return None
+        return lib
+
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        libs = list(pool.map(build, sources))  # the compiler runs outside Python: threads suffice
+    opts = dict(external_options or {})
+    return [list(g) if lib is None else [ca.external(f.name(), str(lib), opts) for f in g] for g, lib in zip(groups, libs)]

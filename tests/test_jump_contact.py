@@ -35,3 +35,37 @@ def test_pyramid_forces_are_unilateral_and_in_the_cone():
         lam = rng.uniform(0, 100, 6)
         for fx, fz in point_forces(lam, 0.4):
             assert fz >= 0 and abs(fx) <= 0.4 * fz + 1e-12
+
+
+def test_point_forces_act_on_their_own_bodies():
+    """Symbolic sum J^T f (heel, ball on the foot, toe on the toes, right foot mirrored) equals
+    numeric Pinocchio: rnea with the same forces as external forces on the joints' bodies."""
+    from latentoc.jump.contact import generator_columns, point_generalized_force, point_jacobians
+
+    model, smap = jump_model()
+    tr = training_jumps()[0]
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    sym = SymbolicModel(model)
+    d = model.createData()
+    rng = np.random.default_rng(5)
+    q = tr.Q[40]
+    lam = rng.uniform(0, 200, 6)
+    fs = point_forces(lam, 0.4)
+    gen_sym = np.array(point_generalized_force(sym, geom, ca.DM(q), fs)).ravel()
+    # reference: external point forces through rnea (f_ext in each joint's local frame)
+    pin.framesForwardKinematics(model, d, q)
+    M = d.oMf[model.getFrameId(FOOT)]
+    left = [M.translation + M.rotation @ geom.heel_offset, d.oMf[model.getFrameId("lfoot_end")].translation,
+            d.oMf[model.getFrameId(TOE)].translation]
+    fext = [pin.Force.Zero() for _ in range(model.njoints)]
+    for side in "lr":
+        for k, frame in enumerate(("lfoot", "lfoot_end", "ltoes_end")):
+            j = model.frames[model.getFrameId(side + frame[1:])].parentJoint
+            p = left[k] * ([1, 1, 1] if side == "l" else [1, -1, 1])
+            f_world = pin.Force(np.array([fs[k][0], 0.0, fs[k][1]]), np.cross(p, [fs[k][0], 0.0, fs[k][1]]))
+            fext[j] += d.oMi[j].actInv(f_world)
+    z = np.zeros(model.nv)
+    ref = pin.rnea(model, d, q, z, z) - pin.rnea(model, d, q, z, z, fext)
+    assert np.allclose(gen_sym, ref, atol=1e-9 * np.abs(ref).max())
+    num = generator_columns(point_jacobians(model, d, q, geom), 0.4) @ lam
+    assert np.allclose(num, ref, atol=1e-9 * np.abs(ref).max())

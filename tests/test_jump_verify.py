@@ -82,3 +82,29 @@ def test_quick_solve_verifies():
     p.options.update(torque_limits=False, polygon=False, complementarity=False)
     r = solve(p, tube=0.2).result
     assert r["success"] and r["max_dynamics_residual"] < 0.2 and r["max_lateral_residual"] < 1e-6
+
+
+def test_point_forces_on_their_bodies_balance_a_static_stance():
+    """With point forces (heel, ball, toe on their own bodies) from a non-negative fit of the
+    base rows, verify finds the base balanced, the points in the cone and the torques consistent."""
+    from scipy.optimize import nnls
+
+    from latentoc.jump.contact import generator_columns, point_forces, point_jacobians
+
+    model, arrays = _static_arrays()
+    q = arrays["q"][0]
+    d = model.createData()
+    C = generator_columns(point_jacobians(model, d, q, FootGeometry(arrays["heel_offset"])), 0.4)
+    z = np.zeros(model.nv)
+    tau = pin.rnea(model, d, q, z, z)
+    lam, res = nnls(C[[0, 2, 4]], tau[[0, 2, 4]])
+    assert res < 1e-8 * np.abs(tau).max()
+    tj = tau[6:] - (C @ lam)[6:]
+    n = len(arrays["t"])
+    arrays.update(point_forces=np.tile(np.array(point_forces(lam, 0.4)), (n, 1, 1)),
+                  tau_min=np.minimum(tj, 0) - 1.0, tau_max=np.maximum(tj, 0) + 1.0)
+    r = verify(model, arrays)
+    assert r["max_dynamics_residual"] < 1e-9 and r["max_point_cone_violation"] <= 1e-12
+    assert r["max_torque_violation"] == 0.0
+    arrays["point_forces"] = arrays["point_forces"] * 0.5
+    assert 0.4 < verify(model, arrays)["max_dynamics_residual"] < 0.6

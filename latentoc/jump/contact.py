@@ -118,3 +118,56 @@ def toe_wrench(lam, P, mu: float = MU):
         rx, rz = P[0, k] - P[0, 2], P[2, k] - P[2, 2]
         my = my + rz * f[k][0] - rx * f[k][1]
     return ca.vertcat(fx, 0, fz, 0, my, 0)
+
+
+MIRROR = np.diag([1.0, -1.0, 1.0])
+
+
+def _skew(p):
+    return ca.vertcat(ca.horzcat(0, -p[2], p[1]), ca.horzcat(p[2], 0, -p[0]), ca.horzcat(-p[1], p[0], 0))
+
+
+def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -> ca.SX:
+    """sum_k J_k(q)^T f_k over the heel, ball and toe points of both feet (casadi, nv).
+
+    ``forces`` are the left foot's (fx, fz) per point (:func:`point_forces`); the right foot
+    carries their mirror image.  Each force acts on its own body (heel and ball on the foot,
+    the toe tip on the toes), with the point Jacobian ``J_lin - [p - o]x J_ang`` of that body's
+    frame (LOCAL_WORLD_ALIGNED), as in the training estimate (:mod:`.torque_limits`).
+    """
+    P = points_function(sym, geom)(q)
+    gen = 0
+    for side in "lr":
+        for k, frame in enumerate((FOOT, BALL, TOE)):
+            name = side + frame[1:]
+            o = sym.frame_placement(name)(q)[0]
+            p = P[:, k] if side == "l" else ca.DM(MIRROR) @ P[:, k]
+            J = sym.frame_jacobian(name)(q)
+            Jp = J[:3, :] - _skew(p - o) @ J[3:, :]
+            fx, fz = forces[k]
+            gen = gen + Jp.T @ ca.vertcat(fx, 0, fz)
+    return gen
+
+
+def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootGeometry) -> np.ndarray:
+    """Numeric (3, 3, nv): for heel, ball, toe, the left point's linear Jacobian plus the mirrored
+    right one's, so that ``sum_k J[k].T @ (fx_k, 0, fz_k)`` is :func:`point_generalized_force`."""
+    pin.computeJointJacobians(model, data, q)
+    pin.framesForwardKinematics(model, data, q)
+    out = np.zeros((3, 3, model.nv))
+    M = data.oMf[model.getFrameId(FOOT)]
+    left = [M.translation + M.rotation @ geom.heel_offset, data.oMf[model.getFrameId(BALL)].translation,
+            data.oMf[model.getFrameId(TOE)].translation]
+    for side in "lr":
+        for k, frame in enumerate((FOOT, BALL, TOE)):
+            fid = model.getFrameId(side + frame[1:])
+            p = left[k] if side == "l" else MIRROR @ left[k]
+            J = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+            out[k] += J[:3] - pin.skew(p - data.oMf[fid].translation) @ J[3:]
+    return out
+
+
+def generator_columns(Jp: np.ndarray, mu: float = MU) -> np.ndarray:
+    """(nv, 6): generalized force of a unit weight on each friction-pyramid edge (heel, ball, toe)."""
+    G = generator_matrix(mu)
+    return np.column_stack([Jp[k].T @ np.array([G[0, e], 0.0, G[1, e]]) for k in range(3) for e in range(2)])

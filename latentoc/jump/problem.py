@@ -22,7 +22,7 @@ from ..spline import BSpline
 from .contact import FootGeometry
 from .phases import Phases, training_phases
 from .torque_limits import TrainingDynamics, estimate_training_dynamics
-from .training import BALL, FOOT, TOE, JumpTraining, jump_model, training_jumps
+from .training import FOOT, TOE, JumpTraining, jump_model, training_jumps
 from .transcription import JumpSettings, build_nlp
 
 
@@ -260,56 +260,57 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     q7, v6, a6 = base_to_freeflyer(*B)
     E = joint_embedding(js.smap)
     Q, V, A = np.column_stack([q7, Y @ E.T]), np.column_stack([v6, Yd @ E.T]), np.column_stack([a6, Ydd @ E.T])
-    # the NLP's contact wrench per foot at its nodes (world-aligned at the toe tip), from the generators
-    grid = nlp.meta["grid"]
-    mass = nlp.meta["mass"]
-    W = mass * 9.81
-    lam = parts["lam"] * W
-    from .contact import point_forces
+    # contact forces: the NLP's point forces (heel, ball, toe on the friction-pyramid edges, in
+    # body weights) at its nodes, interpolated linearly in time within each contact phase, then
+    # corrected by the least-norm change of the six edge weights that balances the three
+    # sagittal base rows of RNEA exactly (``force_correction`` records its size)
+    from .contact import generator_columns, point_forces, point_jacobians, toe_wrench
+
+    grid, W = nlp.meta["grid"], nlp.meta["mass"] * 9.81
+    lam_nodes = np.asarray(parts["lam"], float)  # 6 x n_contact_nodes, body weights
     nS = len(grid["stance"])
     node_t = np.concatenate([grid["stance"], grid["land"]])
-    node_f = np.array([[sum(f[0] for f in point_forces(lam[:, j], s.mu)), sum(f[1] for f in point_forces(lam[:, j], s.mu))]
-                       for j in range(lam.shape[1])])
-    # moment about the toe from the node's point forces needs the node's geometry: recompute from q at nodes
-    wrench = np.zeros((len(t), 6))
-    node_w = np.zeros((len(node_t), 6))
+    lam_t = np.zeros((len(t), 6))
+    for mask, cols, tn in ((st, slice(0, nS), grid["stance"]), (la, slice(nS, None), grid["land"])):
+        for k in range(6):
+            lam_t[mask, k] = np.interp(t[mask], tn, lam_nodes[k, cols])
     d = js.model.createData()
-    fid = {n: js.model.getFrameId(n) for n in ("lfoot", "lfoot_end", "ltoes_end")}
-    node_q = np.zeros((len(node_t), js.model.nq))
-    for j, tj in enumerate(node_t):
-        i = int(np.argmin(np.abs(t - tj)))
-        if j == nS and tj >= ph.touchdown:  # landing node at touchdown: post-impact configuration
-            i = int(np.argmax(la))
-        node_q[j] = Q[i]
-        pin.framesForwardKinematics(js.model, d, Q[i])
-        M = d.oMf[fid["lfoot"]]
-        pts = [M.translation + M.rotation @ js.geom.heel_offset, d.oMf[fid["lfoot_end"]].translation,
-               d.oMf[fid["ltoes_end"]].translation]
-        fs = point_forces(lam[:, j], s.mu)
-        my = sum((pts[k][2] - pts[2][2]) * fs[k][0] - (pts[k][0] - pts[2][0]) * fs[k][1] for k in (0, 1))
-        node_w[j] = [node_f[j, 0], 0.0, node_f[j, 1], 0.0, my, 0.0]
-    # 1 kHz wrench: in contact, the wrench the motion needs, solved from the three sagittal
-    # base rows of RNEA (fx, fz, my per foot; the two feet carry equal wrenches by symmetry), so
-    # that verify() checks its cone, unilaterality and centre of pressure between the nodes;
-    # the node wrenches of the NLP (from its force generators) are exported as node_wrench
+    rows = [0, 2, 4]
     tau = np.zeros((len(t), js.model.nv - 6))
-    from .verify import sagittal_contact_wrench
-    ids = [js.model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")]
+    forces = np.zeros((len(t), 3, 2))
+    wrench = np.zeros((len(t), 6))
+    correction = np.zeros(len(t))
+    P_toe = np.zeros((len(t), 3, 3))
     for i in range(len(t)):
         full = pin.rnea(js.model, d, Q[i], V[i], A[i])
         if st[i] or la[i]:
-            pin.computeJointJacobians(js.model, d, Q[i])
-            pin.updateFramePlacements(js.model, d)
-            J = sum(pin.getFrameJacobian(js.model, d, f, pin.LOCAL_WORLD_ALIGNED) for f in ids)
-            wrench[i] = sagittal_contact_wrench(J, full)
-            full = full - J.T @ wrench[i]
+            Jp = point_jacobians(js.model, d, Q[i], js.geom)
+            C = generator_columns(Jp, s.mu) * W  # nv x 6, per body weight of edge weight
+            r = full[rows] - C[rows] @ lam_t[i]
+            dl = C[rows].T @ np.linalg.solve(C[rows] @ C[rows].T, r)
+            lam_t[i] += dl
+            correction[i] = float(np.max(np.abs(dl)))
+            full = full - C @ lam_t[i]
+            fs = point_forces(lam_t[i] * W, s.mu)
+            forces[i] = np.array(fs)
+            M = d.oMf[js.model.getFrameId("lfoot")]
+            P_toe[i] = np.column_stack([M.translation + M.rotation @ js.geom.heel_offset,
+                                        d.oMf[js.model.getFrameId("lfoot_end")].translation,
+                                        d.oMf[js.model.getFrameId("ltoes_end")].translation])
+            wrench[i] = np.array(toe_wrench(lam_t[i] * W, P_toe[i], s.mu)).ravel()
         tau[i] = full[6:]
-    return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "contact": (st | la).astype(np.int8),
+    node_w = np.zeros((len(node_t), 6))
+    for j, tj in enumerate(node_t):
+        i = int(np.argmin(np.abs(t - tj)))
+        node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_toe[i], s.mu)).ravel()
+    return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
+            "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
             "sigma2": S2.ravel(), "latent": X, "control_points": P, "node_t": node_t, "node_wrench": node_w,
-            "node_lambda": lam.T, "contact_frames": np.array(["ltoes_end", "rtoes_end"]),
+            "node_lambda": lam_nodes.T, "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end",
+                                                                     "rfoot", "rfoot_end", "rtoes_end"]),
             "contact_points": np.array(["heel", "ball", "toe"]), "heel_offset": js.geom.heel_offset,
             "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,
-            "tau_min": js.limits.tau_min, "tau_max": js.limits.tau_max,
+            "tau_min": js.limits.tau_min, "tau_max": js.limits.tau_max, "friction": s.mu,
             "model": js.model.saveToString()}
 
 
@@ -323,8 +324,8 @@ def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSett
     o = problem.options
     h = hessian or problem.hessian
     return JumpSettings(tube=float(tube), mu=float(o.get("friction", 0.4)), n_control=int(problem.control_points),
-                        n_stance=int(o.get("n_stance", 10)), n_flight=int(o.get("n_flight", 9)),
-                        n_land=int(o.get("n_land", 14)), max_iter=int(problem.max_iter), tol=float(problem.tol),
+                        n_stance=int(o.get("n_stance", 32)), n_flight=int(o.get("n_flight", 20)),
+                        n_land=int(o.get("n_land", 62)), max_iter=int(problem.max_iter), tol=float(problem.tol),
                         hessian="limited-memory" if h in ("lbfgs", "limited-memory") else "exact",
                         torque_limits=bool(o.get("torque_limits", True)), polygon=bool(o.get("polygon", True)),
                         complementarity=bool(o.get("complementarity", True)),
@@ -343,8 +344,9 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
 
     if method != "latent":
         raise SolveError(f"broad-jump supports method 'latent' only, got {method!r}")
-    if hessian not in (None, "exact", "lbfgs"):
-        raise SolveError(f"hessian must be 'exact' or 'lbfgs', got {hessian!r}")
+    if hessian not in (None, "lbfgs"):
+        raise SolveError(f"broad-jump supports hessian 'lbfgs' only (its lifted rows give first derivatives), "
+                         f"got {hessian!r}")
     o = problem.options
     training = "all" if o.get("training_jumps", "one") == "all" else 0
     key = (training, latent_dim or problem.latent_dim, control_points or problem.control_points,

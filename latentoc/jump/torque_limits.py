@@ -19,8 +19,8 @@ from scipy.optimize import nnls
 
 from ..spline import BSpline
 from .base import base_to_freeflyer
-from .contact import MU, FootGeometry, generator_matrix, joint_embedding
-from .training import BALL, FOOT, TOE, JumpTraining
+from .contact import MU, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
+from .training import JumpTraining
 
 
 @dataclass
@@ -54,30 +54,12 @@ def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: F
     Q, V, A = smoothed_motion(tr, E, n_control)
     d = model.createData()
     G = generator_matrix(mu)
-    fids = {s: [model.getFrameId(s + n[1:]) for n in (FOOT, BALL, TOE)] for s in "lr"}
     n = len(Q)
     taus, forces, res = np.zeros((n, model.nv - 6)), np.zeros((n, 3, 2)), np.zeros((n, 6))
     for i in range(n):
         tau = pin.rnea(model, d, Q[i], V[i], A[i])
         if in_contact[i]:
-            pin.computeJointJacobians(model, d, Q[i])
-            pin.framesForwardKinematics(model, d, Q[i])
-            cols = []
-            for k in range(3):  # heel, ball, toe
-                for gcol in G.T:
-                    gen = np.zeros(model.nv)
-                    ML = d.oMf[fids["l"][k]]
-                    p_left = ML.translation + (ML.rotation @ geom.heel_offset if k == 0 else 0.0)
-                    for s in "lr":
-                        fid = fids[s][k]
-                        M = d.oMf[fid]
-                        # heel point defined on the left foot; the right one is its mirror image
-                        p = p_left if s == "l" else p_left * np.array([1.0, -1.0, 1.0])
-                        J = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
-                        Jp = J[:3] - pin.skew(p - M.translation) @ J[3:]
-                        gen += Jp.T @ np.array([gcol[0], 0.0, gcol[1]])
-                    cols.append(gen)
-            Acols = np.array(cols).T
+            Acols = generator_columns(point_jacobians(model, d, Q[i], geom), mu)
             rows = [0, 2, 4]
             lam, _ = nnls(Acols[rows], tau[rows])
             gf = Acols @ lam

@@ -71,14 +71,18 @@ from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
 from ..spline import BSpline
 from .base import base_function
-from .flight import ballistic_base, flight_functions
-from .contact import MU, FootGeometry, anchor_function, toe_wrench, joint_embedding, points_function, point_forces
+from .contact import MU, FootGeometry, anchor_function, joint_embedding, point_generalized_force, point_forces, \
+    points_function, toe_wrench
+from .flight import GRAVITY, ballistic_base, cumulative_trapezoid_matrix, flight_functions
+from .lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
 from .phases import Phases
 from .support_polygon import symbolic_rows
 from .torque_limits import TrainingDynamics
-from .zmp import G, zmp
+from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]
+CONTACT_ROWS = ("dynamics", "torque", "heel_complementarity", "ball_complementarity", "ball_height", "heel_up",
+                "zmp_polygon", "com_polygon")
 
 
 @dataclass
@@ -88,23 +92,24 @@ class JumpSettings:
     tube: float = 0.0005
     mu: float = MU
     n_control: int = 21  # paper 11; 11 cannot follow the push-off (see the module doc)
-    n_stance: int = 10
-    n_flight: int = 9
-    n_land: int = 14
+    n_stance: int = 32  # contact nodes every 10 ms: sparser grids let the motion wobble between nodes
+    n_flight: int = 20
+    n_land: int = 62
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
-    flight_substeps: int = 4  # trapezoid steps of the pitch rate per flight node interval
+    flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     complementarity_eps: float = 1e-4  # body weights x metres
     ball_tolerance: float = 0.02
     tube_spacing: float = 0.005  # s; the tube (cheap: GP variance only) on this grid, not only at nodes
     max_iter: int = 400
     tol: float = 1e-5
-    hessian: str = "limited-memory"  # or "exact"
+    hessian: str = "limited-memory"  # the only one: the lifted rows give first derivatives only
     print_level: int = 0
     torque_limits: bool = True
     complementarity: bool = True
     polygon: bool = True
     two_phase: bool = True  # phase 1 feasibility near the training fit, then phase 2 max distance
+    jit: bool = True  # node rows and Jacobians compiled to C (:mod:`.lifted`)
 
 
 @dataclass
@@ -123,30 +128,6 @@ class JumpNLP:
     meta: dict = field(default_factory=dict)
 
 
-def node_function(sym: SymbolicModel, smap, gpdm: GPDM, geom: FootGeometry, mu: float) -> ca.Function:
-    """(x, xd, xdd, b, bd, bdd, lam) -> res[6], tau[nv-6], P[3x3 flat], com, wrench (one foot, at the toe tip), sigma2, q, v, a."""
-    d = gpdm.latent_dim
-    x, xd, xdd = (ca.SX.sym(n, d) for n in ("x", "xd", "xdd"))
-    b, bd, bdd = (ca.SX.sym(n, 3) for n in ("b", "bd", "bdd"))
-    lam = ca.SX.sym("lam", 6)
-    y = gpdm.mean_function()(x)
-    yd = ca.jtimes(y, x, xd)
-    ydd = ca.jtimes(y, x, xdd) + ca.jtimes(yd, x, xd)
-    E = ca.DM(joint_embedding(smap))
-    q7, v6, a6 = base_function()(b, bd, bdd)
-    q, v, a = ca.vertcat(q7, E @ y), ca.vertcat(v6, E @ yd), ca.vertcat(a6, E @ ydd)
-    tau = sym.rnea(q, v, a)
-    P = points_function(sym, geom)(q)
-    w = toe_wrench(lam, P, mu)
-    gen = sym.frame_jacobian("ltoes_end")(q).T @ w + sym.frame_jacobian("rtoes_end")(q).T @ w
-    res = tau[:6] - gen[:6]
-    return ca.Function("jump_node", [x, xd, xdd, b, bd, bdd, lam],
-                       [res, tau[6:] - gen[6:], ca.vec(P), sym.com(q), w,
-                        gpdm.variance_function()(x), q, v, a],
-                       ["x", "xd", "xdd", "b", "bd", "bdd", "lam"],
-                       ["res", "tau", "P", "com", "wrench", "sigma2", "q", "v", "a"])
-
-
 def anchored_function(sym: SymbolicModel, smap, gpdm: GPDM, geom: FootGeometry) -> ca.Function:
     """(x, xd, xdd, phi, phid, phidd, x_pin) -> b, bd, bdd of the toe-pinned base."""
     d = gpdm.latent_dim
@@ -161,24 +142,234 @@ def anchored_function(sym: SymbolicModel, smap, gpdm: GPDM, geom: FootGeometry) 
                        ["x", "xd", "xdd", "phi", "phid", "phidd", "x_pin"], ["b", "bd", "bdd"])
 
 
+def _joint_motion(gpdm: GPDM, smap, x, xd, xdd):
+    """Learned-coordinate (y, yd, ydd) through the GP mean (Eq. 18, 26-28) and the embedding E."""
+    y = gpdm.mean_function()(x)
+    yd = ca.jtimes(y, x, xd)
+    ydd = ca.jtimes(y, x, xdd) + ca.jtimes(yd, x, xd)
+    E = ca.DM(joint_embedding(smap))
+    return y, E @ y, E @ yd, E @ ydd
+
+
+def _configuration(b, bd, bdd, qj, vj, aj):
+    q7, v6, a6 = base_function()(b, bd, bdd)
+    return ca.vertcat(q7, qj), ca.vertcat(v6, vj), ca.vertcat(a6, aj)
+
+
+@dataclass
+class RowModel:
+    """What the node rows need: models, geometry, limits, scales."""
+
+    sym: SymbolicModel
+    smap: object
+    gpdm: GPDM
+    geom: FootGeometry
+    limits: TrainingDynamics
+    mu: float
+    mass: float
+
+    @property
+    def weight(self) -> float:
+        return self.mass * G
+
+    @property
+    def active(self) -> np.ndarray:
+        """Joints with a torque range (the others vanish by symmetry; checked in verify)."""
+        return np.where(self.limits.tau_max - self.limits.tau_min > 1e-6)[0]
+
+    @property
+    def torque_scale(self) -> np.ndarray:
+        a = self.active
+        return np.maximum(self.limits.tau_max[a] - self.limits.tau_min[a], 1.0)
+
+    def torque_rows(self, tau_joint):
+        a = self.active
+        return tau_joint[a.tolist()] / ca.DM(self.torque_scale)
+
+
+def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """Rows of one contact node, u = (x, xd, xdd, phi, phid, phidd, x_pin, lam[6]).
+
+    The base is toe-pinned (:func:`anchored_function`); the point forces of the heel, ball
+    and toe (``lam`` in body weights on the friction-pyramid edges, :mod:`.contact`) act on
+    their own bodies.  Rows: sagittal base rows of RNEA minus sum J^T f (body weights); joint
+    torques (scaled to the limit range); heel and ball complementarity and ball height; the
+    foot pitch phi >= 0; the ZMP (centre of pressure of both feet) in the support polygon,
+    multiplied by the normal force so that it stays smooth as fz -> 0; the projected COM in it.
+    """
+    d, W = rm.gpdm.latent_dim, rm.weight
+    u = ca.SX.sym("u", 3 * d + 10)
+    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
+    phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
+    lam = u[3 * d + 4:]
+    b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
+    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
+    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
+    tau = rm.sym.rnea(q, v, a)
+    gen = point_generalized_force(rm.sym, rm.geom, q, point_forces(lam * W, rm.mu))
+    P = points_function(rm.sym, rm.geom)(q)
+    w = toe_wrench(lam, P, rm.mu)  # body weights, moment about the toe tip
+    fz, my = w[2], w[4]
+    heel, toe = P[:2, 0], P[:2, 2]
+    rows = symbolic_rows(heel, toe)
+    # ZMP x = toe_x - my / fz, y = 0; rows(p) are affine in p: fz rows(p) = rows_h(fz p, fz)
+    parts = {
+        "dynamics": (tau - gen)[SAGITTAL_ROWS] / W,
+        "torque": rm.torque_rows((tau - gen)[6:]),
+        "heel_complementarity": P[2, 0] * (lam[0] + lam[1]),
+        "ball_complementarity": P[2, 1] * (lam[2] + lam[3]),
+        "ball_height": P[2, 1],
+        "heel_up": phi,
+        "zmp_polygon": _homogeneous_rows(heel, toe, ca.vertcat(toe[0] * fz - my, 0), fz),
+        "com_polygon": rows(rm.sym.com(q)[:2]),
+    }
+    return _node_rows("jump_contact_node", u, parts)
+
+
+def _homogeneous_rows(heel, toe, p_scaled, s):
+    """s * rows(p_scaled / s) of the support polygon (:func:`symbolic_rows`), without the division."""
+    V = [(heel[0], -heel[1]), (toe[0], -toe[1]), (toe[0], toe[1]), (heel[0], heel[1])]
+    out = []
+    for i in range(4):
+        (x0, y0), (x1, y1) = V[i], V[(i + 1) % 4]
+        ex, ey = x1 - x0, y1 - y0
+        out.append(-(ex * (p_scaled[1] - y0 * s) - ey * (p_scaled[0] - x0 * s)) / ca.sqrt(ex * ex + ey * ey))
+    return ca.vertcat(*out)
+
+
+def _node_rows(name: str, u: ca.SX, parts: dict) -> tuple[NodeRows, dict[str, slice]]:
+    layout, off = {}, 0
+    for k, e in parts.items():
+        layout[k] = slice(off, off + e.numel())
+        off += e.numel()
+    return NodeRows.from_expression(name, u, ca.vertcat(*[ca.vec(e) for e in parts.values()])), layout
+
+
+def _flight_base(rm: RowModel, x, xd, xdd, p, L, c_to, cd_to, tt):
+    """Ballistic base (b, bd, bdd) at flight time tt (:mod:`.flight`) for pitch p, momentum L."""
+    fns = flight_functions(rm.sym, rm.smap, rm.gpdm)
+    pd, pdd = fns["pitch_rate"](x, xd, xdd, L)
+    g = ca.DM(GRAVITY)
+    c = c_to + cd_to * tt + 0.5 * g * tt ** 2
+    return fns["base"](x, xd, xdd, p, pd, pdd, c, cd_to + g * tt, g)
+
+
+def flight_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """Rows of one flight node, u = (x, xd, xdd, pitch, L, c_to[2], cd_to[2], t - takeoff):
+    joint torques of the ballistic motion and the heel, ball and toe heights."""
+    d = rm.gpdm.latent_dim
+    u = ca.SX.sym("u", 3 * d + 7)
+    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
+    p, L, c_to, cd_to, tt = u[3 * d], u[3 * d + 1], u[3 * d + 2:3 * d + 4], u[3 * d + 4:3 * d + 6], u[3 * d + 6]
+    b, bd, bdd = _flight_base(rm, x, xd, xdd, p, L, c_to, cd_to, tt)
+    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
+    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
+    tau = rm.sym.rnea(q, v, a)
+    P = points_function(rm.sym, rm.geom)(q)
+    return _node_rows("jump_flight_node", u, {"torque": rm.torque_rows(tau[6:]), "flight_clearance": P[2, :].T})
+
+
+def takeoff_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """Takeoff state rows, u = (x, xd, xdd, phi, phid, phidd, c_to[2], cd_to[2], L, pitch):
+    the flight variables equal the toe-pinned state's COM, COM velocity, angular momentum and pitch."""
+    d = rm.gpdm.latent_dim
+    u = ca.SX.sym("u", 3 * d + 9)
+    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
+    phi, phid, phidd = u[3 * d], u[3 * d + 1], u[3 * d + 2]
+    c_to, cd_to, L, p = u[3 * d + 3:3 * d + 5], u[3 * d + 5:3 * d + 7], u[3 * d + 7], u[3 * d + 8]
+    b, bd, _ = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, 0.0)
+    c, cd, Lm = flight_functions(rm.sym, rm.smap, rm.gpdm)["momentum"](x, xd, b, bd)
+    return _node_rows("jump_takeoff", u, {"takeoff": ca.vertcat(c - c_to, cd - cd_to, Lm - L, b[2] - p)})
+
+
+def touchdown_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """Touchdown rows, u = (x, xd, xdd, phi, phid, phidd, x_L, pitch, L, c_to[2], cd_to[2],
+    t_td - takeoff, impulse[6]): the flight's base pose meets the landing's toe-pinned pose, and
+    the inelastic impact ``M_bb (v+ - v-) = (sum J^T Pi)_base`` (module doc; impulse in units
+    of 0.1 s of body weight, on the friction-pyramid edges like the forces)."""
+    d, W = rm.gpdm.latent_dim, rm.weight
+    u = ca.SX.sym("u", 3 * d + 17)
+    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
+    phi, phid, phidd, xL = (u[3 * d + k] for k in range(4))
+    p, L, c_to, cd_to, tt = u[3 * d + 4], u[3 * d + 5], u[3 * d + 6:3 * d + 8], u[3 * d + 8:3 * d + 10], u[3 * d + 10]
+    imp = u[3 * d + 11:]
+    bm, bdm, _ = _flight_base(rm, x, xd, xdd, p, L, c_to, cd_to, tt)
+    bp, bdp, _ = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xL)
+    _, qj, _, _ = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
+    z3 = ca.DM.zeros(3)
+    q = _configuration(bp, z3, z3, qj, 0 * qj, 0 * qj)[0]
+    v_minus = base_function()(bp, bdm, z3)[1]
+    v_plus = base_function()(bp, bdp, z3)[1]
+    Mbb = rm.sym.mass_matrix(q)[:6, :6]
+    gen = point_generalized_force(rm.sym, rm.geom, q, point_forces(imp * W * 0.1, rm.mu))
+    impact = Mbb @ (v_plus - v_minus) - gen[:6]
+    return _node_rows("jump_touchdown", u, {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W})
+
+
+def pitch_rate_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """Pitch rate of the flight, u = (x, xd, xdd, L): pd = (L - h) / I (:mod:`.flight`)."""
+    d = rm.gpdm.latent_dim
+    u = ca.SX.sym("u", 3 * d + 1)
+    pd, _ = flight_functions(rm.sym, rm.smap, rm.gpdm)["pitch_rate"](u[:d], u[d:2 * d], u[2 * d:3 * d], u[3 * d])
+    return _node_rows("jump_pitch_rate", u, {"pitch_rate": pd})
+
+
+def tube_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """GP variance sigma^2(x) (Eq. 19, 29), u = x."""
+    u = ca.SX.sym("u", rm.gpdm.latent_dim)
+    return _node_rows("jump_tube", u, {"tube": rm.gpdm.variance_function()(u)})
+
+
+_ROW_CACHE: dict = {}
+
+
+def node_rows(rm: RowModel, jit: bool = True) -> dict[str, tuple[NodeRows, dict[str, slice]]]:
+    """All row blocks of the jump, compiled (cached per model, GPDM, geometry, limits and mu)."""
+    key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, jit)
+    if key not in _ROW_CACHE:
+        raw = {f.__name__: f(rm) for f in (contact_rows, flight_rows, takeoff_rows, touchdown_rows,
+                                            pitch_rate_rows, tube_rows)}
+        compiled = compile_node_rows({k: v[0] for k, v in raw.items()}, jit=jit)
+        _ROW_CACHE[key] = (rm, {k: (compiled[k], raw[k][1]) for k in raw})  # keep rm alive for the ids
+    return _ROW_CACHE[key][1]
+
+
 def _basis(sp: BSpline, t: np.ndarray, offset: float = 0.0) -> list[np.ndarray]:
     return [sp.basis(np.clip(t - offset, 0, sp.duration), k) for k in range(3)]
+
+
+def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]]) -> tuple[list[int], list[str]]:
+    """Row indices (node-major) and names of the chosen parts of each node."""
+    idx, names = [], []
+    for k in range(K):
+        for part in per_node[k]:
+            s = layout[part]
+            idx.extend(range(k * n_out + s.start, k * n_out + s.stop))
+            names.extend([part] * (s.stop - s.start))
+    return idx, names
 
 
 def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Phases,
               limits: TrainingDynamics, settings: JumpSettings, init: dict,
               sym: SymbolicModel | None = None) -> JumpNLP:
-    """Assemble the NLP; ``init`` holds initial guesses (P, phi_s, phi_l, flight, x_L, lam)."""
+    """Assemble the NLP; ``init`` holds initial guesses (P, phi_s, phi_l, x_L, lam)."""
     t0 = time.perf_counter()
     s = settings
+    if s.hessian != "limited-memory":
+        raise ValueError(f"the broad jump supports the limited-memory Hessian only, got {s.hessian!r}")
     sym = sym or SymbolicModel(model)
     mass = float(sum(i.mass for i in model.inertias))
+    rm = RowModel(sym, smap, gpdm, geom, limits, s.mu, mass)
+    blocks = node_rows(rm, jit=s.jit)
     dlat = gpdm.latent_dim
     grid = phases.grid(s.n_stance, s.n_flight, s.n_land)
     T = phases.duration
     sp = BSpline(s.n_control, T)
     sps = BSpline(s.n_phi_stance, phases.takeoff)
     spl = BSpline(s.n_phi_land, T - phases.touchdown)
+    ts, tf, tl = grid["stance"], grid["flight"], grid["land"]
+    nS, nF, nL = len(ts), len(tf), len(tl)
+    nC = nS + nL
 
     # ---------------------------------------------------------------- variables
     Pfix = np.asarray(init["P"], float)
@@ -187,141 +378,146 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     cs = ca.MX.sym("phi_s", s.n_phi_stance)
     cl = ca.MX.sym("phi_l", s.n_phi_land)
     xL = ca.MX.sym("x_L")
-    n_contact = s.n_stance + s.n_land
-    Lam = ca.MX.sym("lam", 6, n_contact)
+    Lam = ca.MX.sym("lam", 6, nC)
     Limp = ca.MX.sym("lam_impact", 6)
-    blocks = [("P", Pfree), ("phi_s", cs), ("phi_l", cl), ("x_L", xL), ("lam", Lam), ("lam_impact", Limp)]
-    w = ca.veccat(*[v for _, v in blocks])
+    c_to, cd_to, L_to = ca.MX.sym("c_to", 2), ca.MX.sym("cd_to", 2), ca.MX.sym("L_to")
+    pf = ca.MX.sym("pitch_flight", nF)
+    vblocks = [("P", Pfree), ("phi_s", cs), ("phi_l", cl), ("x_L", xL), ("lam", Lam), ("lam_impact", Limp),
+               ("c_to", c_to), ("cd_to", cd_to), ("L_to", L_to), ("pitch_flight", pf)]
+    w = ca.veccat(*[v for _, v in vblocks])
 
-    anch = anchored_function(sym, smap, gpdm, geom)
-    node = node_function(sym, smap, gpdm, geom, s.mu)
+    def latent(t):
+        return [ca.sparsify(ca.DM(B)) @ Pm for B in _basis(sp, t)]  # each K x d
 
-    # latent and base per node: stance, flight, landing
-    ts, tf, tl = grid["stance"], grid["flight"], grid["land"]
-    lat = [[ca.sparsify(ca.DM(B)) @ Pm for B in _basis(sp, tt)] for tt in (ts, tf, tl)]
-    phis = [ca.sparsify(ca.DM(B)) @ cs for B in _basis(sps, ts)]
-    phil = [ca.sparsify(ca.DM(B)) @ cl for B in _basis(spl, tl, phases.touchdown)]
-    A_s = anch.map(len(ts))
-    bs = A_s(lat[0][0].T, lat[0][1].T, lat[0][2].T, phis[0].T, phis[1].T, phis[2].T, ca.DM.zeros(1, len(ts)))
-    A_l = anch.map(len(tl))
-    bl = A_l(lat[2][0].T, lat[2][1].T, lat[2][2].T, phil[0].T, phil[1].T, phil[2].T, ca.repmat(xL, 1, len(tl)))
-    # flight: ballistic from the takeoff state (:mod:`.flight`), pitch integrated on a grid with
-    # flight_substeps steps per node interval, the nodes on every flight_substeps-th point
-    fns = flight_functions(sym, smap, gpdm)
+    def lat_rows(t):
+        return ca.vertcat(*[X.T for X in latent(t)])  # 3d x K
+
+    g, jac, names = [], [], []
+
+    def add(block: str, U: ca.MX, per_node: list[list[str]]):
+        nr, layout = blocks[block]
+        gb, jb = lifted_rows(nr, U, w)
+        idx, nm = _layout_indices(layout, nr.n_out, U.shape[1], per_node)
+        if idx:
+            gi, ji = select_rows(gb, jb, np.array(idx))
+            g.append(gi)
+            jac.append(ji)
+            names.extend(nm)
+
+    # contact nodes: stance (toe at x = 0), landing (toe at x_L)
+    phis = ca.horzcat(*[ca.sparsify(ca.DM(B)) @ cs for B in _basis(sps, ts)]).T
+    phil = ca.horzcat(*[ca.sparsify(ca.DM(B)) @ cl for B in _basis(spl, tl, phases.touchdown)]).T
+    Uc = ca.vertcat(ca.horzcat(lat_rows(ts), lat_rows(tl)), ca.horzcat(phis, phil),
+                    ca.horzcat(ca.DM.zeros(1, nS), ca.repmat(xL, 1, nL)), Lam)
+    base_rows = ["dynamics"] + (["torque"] if s.torque_limits else []) + \
+                (["heel_complementarity", "ball_complementarity"] if s.complementarity else []) + ["ball_height", "heel_up"]
+    per_node = [list(base_rows) for _ in range(nS)]
+    for tk in tl:
+        extra = (["zmp_polygon"] + (["com_polygon"] if tk >= phases.settle - 1e-9 else [])) if s.polygon else []
+        per_node.append(base_rows + extra)
+    add("contact_rows", Uc, per_node)
+
+    # flight: takeoff state variables, pitch by the trapezoid rule on a fine grid, nodes
+    tau_f = tf - phases.takeoff
+    Xto = lat_rows(np.array([phases.takeoff]))
+    phi_to = ca.vertcat(*[ca.sparsify(ca.DM(B)) @ cs for B in _basis(sps, np.array([phases.takeoff]))])
+    add("takeoff_rows", ca.vertcat(Xto, phi_to, c_to, cd_to, L_to, pf[0]), [["takeoff"]])
     nsub = max(1, int(s.flight_substeps))
-    tau = np.linspace(0.0, phases.touchdown - phases.takeoff, (len(tf) - 1) * nsub + 1)
-    latf = [ca.sparsify(ca.DM(B)) @ Pm for B in _basis(sp, phases.takeoff + tau)]
-    bf_fine = ballistic_base(fns, latf[0].T, latf[1].T, latf[2].T, tau, bs[0][:, -1], bs[1][:, -1],
-                             lat[0][0][-1, :].T, lat[0][1][-1, :].T)
-    bf = [v[:, list(range(0, len(tau), nsub))] for v in bf_fine]
+    tau_fine = np.linspace(0.0, tau_f[-1], (nF - 1) * nsub + 1)
+    nr, layout = blocks["pitch_rate_rows"]
+    gpd, jpd = lifted_rows(nr, ca.vertcat(lat_rows(phases.takeoff + tau_fine), ca.repmat(L_to, 1, len(tau_fine))), w)
+    A = cumulative_trapezoid_matrix(tau_fine)[:, ::nsub].T[1:]  # (nF - 1) x fine: int_0^tau_k pd
+    B = ca.horzcat(-ca.DM.ones(nF - 1, 1), ca.DM.eye(nF - 1))  # p_k - p_0
+    lin = ca.mtimes(B, pf)
+    g.append(lin - ca.mtimes(ca.DM(A), gpd))
+    jac.append(ca.jacobian(lin, w) - ca.mtimes(ca.DM(A), jpd))
+    names.extend(["pitch_integration"] * (nF - 1))
+    Uf = ca.vertcat(lat_rows(tf), pf.T, ca.repmat(ca.vertcat(L_to, c_to, cd_to), 1, nF), ca.DM(tau_f).T)
+    add("flight_rows", Uf, [(["torque"] if s.torque_limits else []) + (["flight_clearance"] if 0 < k < nF - 1 else [])
+                            for k in range(nF)])
+    phi_td = ca.vertcat(*[ca.sparsify(ca.DM(B)) @ cl for B in _basis(spl, np.array([phases.touchdown]), phases.touchdown)])
+    Utd = ca.vertcat(lat_rows(np.array([phases.touchdown])), phi_td, xL, pf[-1], L_to, c_to, cd_to,
+                     float(tau_f[-1]), Limp)
+    add("touchdown_rows", Utd, [["touchdown_position", "impact"]])
 
-    Xall = [ca.horzcat(lat[0][k].T, lat[1][k].T, lat[2][k].T) for k in range(3)]
-    Ball = [ca.horzcat(bs[k], bf[k], bl[k]) for k in range(3)]
-    nS, nF, nL = len(ts), len(tf), len(tl)
-    W = mass * G
-    Lall = W * ca.horzcat(Lam[:, :nS], ca.DM.zeros(6, nF), Lam[:, nS:])  # Lam in body weights
-    N = nS + nF + nL
-    out = node.map(N)(Xall[0], Xall[1], Xall[2], Ball[0], Ball[1], Ball[2], Lall)
-    res, tau, Pp, com, dh = out[:5]
-
-    g, lbg, ubg, names = [], [], [], []
-
-    def add(expr, lo, hi, name):
-        expr = ca.vec(expr)
-        n = expr.numel()
-        g.append(expr)
-        lbg.append(np.broadcast_to(lo, (n,)).astype(float))
-        ubg.append(np.broadcast_to(hi, (n,)).astype(float))
-        names.extend([name] * n)
-
-    contact_cols = list(range(nS)) + list(range(nS + nF, N))
-    # base rows where feet touch; in flight they hold by construction (checked by verify)
-    add(res[SAGITTAL_ROWS, :][:, contact_cols] / W, 0.0, 0.0, "dynamics")
-    # joints whose torque vanishes by symmetry (centre ry/rz) have a zero range: checked in verify
-    act = np.where(limits.tau_max - limits.tau_min > 1e-6)[0]
-    if s.torque_limits:
-        sc = np.maximum(limits.tau_max[act] - limits.tau_min[act], 1.0)  # rows scaled to O(1)
-        add(tau[act.tolist(), :] / ca.DM(np.repeat(sc[:, None], N, 1)), np.tile(limits.tau_min[act] / sc, N),
-            np.tile(limits.tau_max[act] / sc, N), "torque")
-    # tube on a dense grid (the end points are fixed on the training path): at the nodes only,
-    # the latent path slips out between them (1 kHz max sigma^2 0.0212 for delta 0.02, measured)
+    # tube on a dense grid (the end points are fixed on the training path)
     n_tube = max(2, int(round(T / s.tube_spacing)) + 1)
     t_tube = np.linspace(0.0, T, n_tube)[1:-1]
-    X_tube = ca.sparsify(ca.DM(sp.basis(t_tube, 0))) @ Pm
-    add(gpdm.variance_function().map(len(t_tube))(X_tube.T), -np.inf, s.tube, "tube")
-    heel_z, ball_z = Pp[2, :], Pp[5, :]
-    for j, c in enumerate(contact_cols):
-        lam = Lam[:, j]
-        if s.complementarity:
-            add(heel_z[c] * (lam[0] + lam[1]), -np.inf, s.complementarity_eps, "heel_complementarity")
-            add(ball_z[c] * (lam[2] + lam[3]), -np.inf, s.complementarity_eps, "ball_complementarity")
-        add(ball_z[c], -s.ball_tolerance, np.inf, "ball_height")
-    add(ca.vertcat(phis[0], phil[0]), 0.0, np.inf, "heel_up")
-    for c in range(nS + 1, nS + nF - 1):  # flight interior: no penetration
-        add(Pp[[2, 5, 8], c], 0.0, np.inf, "flight_clearance")
-    # touchdown: position continuity and inelastic impact
-    add(bf[0][:, -1] - bl[0][:, 0], 0.0, 0.0, "touchdown_position")
-    ctd = nS + nF  # first landing column
-    qtd = out[6][:, ctd]
-    bfun = base_function()
-    v_minus = bfun(bl[0][:, 0], bf[1][:, -1], ca.DM.zeros(3))[1]
-    v_plus = bfun(bl[0][:, 0], bl[1][:, 0], ca.DM.zeros(3))[1]
-    Mbb = sym.mass_matrix(qtd)[:6, :6]
-    Ptd = ca.reshape(Pp[:, ctd], 3, 3)
-    wimp = toe_wrench(Limp * W * 0.1, Ptd, s.mu)  # impulse in units of 0.1 s of body weight
-    Jl, Jr = sym.frame_jacobian("ltoes_end")(qtd), sym.frame_jacobian("rtoes_end")(qtd)
-    imp = Mbb @ (v_plus - v_minus) - (Jl.T @ wimp + Jr.T @ wimp)[:6]
-    add(imp[SAGITTAL_ROWS] / W, 0.0, 0.0, "impact")
-    # landing: ZMP in the polygon at every landing node, COM once settled (Eq. 35, 36)
-    for c, tk in zip(range(nS + nF, N), tl):
-        P3 = ca.reshape(Pp[:, c], 3, 3)
-        rows = symbolic_rows(P3[:2, 0], P3[:2, 2])
-        # ZMP = centre of pressure of the total contact wrench on flat ground (see .zmp);
-        # equal to the centroidal-momentum formula when the base rows hold (checked in verify)
-        wr = dh[:, c]
-        px, py = P3[0, 2] - wr[4] / (wr[2] + 1e-9), 0.0
-        if s.polygon:
-            add(rows(ca.vertcat(px, py)), -np.inf, 0.0, "zmp_polygon")
-        if s.polygon and tk >= phases.settle - 1e-9:
-            add(rows(com[:2, c]), -np.inf, 0.0, "com_polygon")
+    add("tube_rows", latent(t_tube)[0].T, [["tube"] for _ in t_tube])
 
-    G_ = ca.vertcat(*g)
-    x0_pin = 0.0
+    G_, J_ = ca.vertcat(*g), ca.vertcat(*jac)
+    bounds = {"dynamics": (0, 0), "torque": None, "heel_complementarity": (-np.inf, s.complementarity_eps),
+              "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
+              "heel_up": (0, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
+              "takeoff": (0, 0), "pitch_integration": (0, 0), "flight_clearance": (0, np.inf),
+              "touchdown_position": (0, 0), "impact": (0, 0), "tube": (-np.inf, s.tube)}
+    lbg, ubg = np.zeros(len(names)), np.zeros(len(names))
+    act = rm.active
+    tmin, tmax = limits.tau_min[act] / rm.torque_scale, limits.tau_max[act] / rm.torque_scale
+    names_a = np.array(names)
+    for k, bnd in bounds.items():
+        sel = names_a == k
+        if k == "torque":
+            n = int(sel.sum()) // len(act)
+            lbg[sel], ubg[sel] = np.tile(tmin, n), np.tile(tmax, n)
+        elif sel.any():
+            lbg[sel], ubg[sel] = bnd
+
     # objective weight p: p = 1 maximises the distance (Eq. 33, phase 2); p = 0 is phase 1, the
     # feasibility problem: the point satisfying every hard constraint closest to the initial fit
     # of the training path (squared deviation of the free latent control points)
     pw = ca.MX.sym("p_distance")
     dev = ca.sumsqr(Pfree - ca.DM(Pfix[1:-1])) / max(float(np.mean(np.square(Pfix))), 1e-12)
-    f = pw * (-(xL - x0_pin)) + (1 - pw) * dev + 1e-4 * ca.sumsqr(Lam) + 1e-4 * ca.sumsqr(Limp)  # tiny force regularisation
+    f = pw * (-xL) + (1 - pw) * dev + 1e-4 * ca.sumsqr(Lam) + 1e-4 * ca.sumsqr(Limp)  # tiny force regularisation
 
     # bounds and initial guess
     lbx = -np.inf * np.ones(w.numel())
     ubx = np.inf * np.ones(w.numel())
-    off = 0
-    sizes = {}
-    for name, v in blocks:
+    off, sizes = 0, {}
+    for name, v in vblocks:
         sizes[name] = (off, off + v.numel())
         off += v.numel()
     for name in ("lam", "lam_impact"):
-        a, b_ = sizes[name]
-        lbx[a:b_] = 0.0
+        lbx[slice(*sizes[name])] = 0.0
     x0 = np.zeros(w.numel())
     x0[slice(*sizes["P"])] = Pfix[1:-1].ravel(order="F")
     x0[slice(*sizes["phi_s"])] = init["phi_s"]
     x0[slice(*sizes["phi_l"])] = init["phi_l"]
     x0[slice(*sizes["x_L"])] = init["x_L"]
-    x0[slice(*sizes["lam"])] = init.get("lam", np.full(6 * n_contact, 1.0 / 12.0))
+    x0[slice(*sizes["lam"])] = init.get("lam", np.full(6 * nC, 1.0 / 12.0))
     x0[slice(*sizes["lam_impact"])] = 0.5
+    fl = flight_guess(rm, sp, sps, Pfix, np.asarray(init["phi_s"], float), phases.takeoff, tau_fine, nsub)
+    for name in ("c_to", "cd_to", "L_to", "pitch_flight"):
+        x0[slice(*sizes[name])] = fl[name]
 
+    p0 = ca.MX.sym("p", 1)
+    jac_g = ca.Function("jac_g", [w, p0], [G_, J_], ["x", "p"], ["g", "jac_g_x"])
     nlp = {"x": w, "p": pw, "f": f, "g": G_}
     opts = {"ipopt.max_iter": s.max_iter, "ipopt.tol": s.tol, "ipopt.print_level": s.print_level,
-            "print_time": False, "ipopt.hessian_approximation": s.hessian,
+            "print_time": False, "ipopt.hessian_approximation": "limited-memory",
             "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 10,
-            "ipopt.constr_viol_tol": 1e-6, "ipopt.mu_strategy": "adaptive"}
+            "ipopt.constr_viol_tol": 1e-6, "ipopt.mu_strategy": "adaptive", "jac_g": jac_g,
+            "calc_lam_p": False, "calc_lam_x": False}  # the compiled rows have no second derivatives
     solver = ca.nlpsol("broad_jump", "ipopt", nlp, opts)
-    unpack = ca.Function("unpack", [w], [Pm, cs, cl, xL, Lam, Limp],
-                         ["w"], ["P", "phi_s", "phi_l", "x_L", "lam", "lam_impact"])
+    unpack = ca.Function("unpack", [w], [Pm, cs, cl, xL, Lam, Limp, c_to, cd_to, L_to, pf],
+                         ["w"], ["P", "phi_s", "phi_l", "x_L", "lam", "lam_impact", "c_to", "cd_to", "L_to",
+                                 "pitch_flight"])
     build = time.perf_counter() - t0
-    return JumpNLP(solver, x0, lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), unpack, names, build,
+    return JumpNLP(solver, x0, lbx, ubx, lbg, ubg, unpack, names, build,
                    {"grid": grid, "splines": (sp, sps, spl), "mass": mass,
-                    "g_fun": ca.Function("g", [w], [G_]), "sizes": sizes})
+                    "g_fun": ca.Function("g", [w], [G_]), "jac_fun": jac_g, "sizes": sizes})
+
+
+def flight_guess(rm: RowModel, sp: BSpline, sps: BSpline, P: np.ndarray, phi_s: np.ndarray, takeoff: float,
+                 tau_fine: np.ndarray, nsub: int) -> dict[str, np.ndarray]:
+    """Flight variables (takeoff COM, COM velocity, angular momentum, node pitch) of a guess."""
+    t_to = np.array([takeoff])
+    x = [sp.evaluate(P, t_to, k) for k in range(3)]
+    f = [sps.evaluate(phi_s[:, None], t_to, k)[:, 0][None] for k in range(3)]
+    anch = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)
+    b, bd, _ = (np.array(v).ravel() for v in anch(x[0].T, x[1].T, x[2].T, *f, 0.0))
+    fns = flight_functions(rm.sym, rm.smap, rm.gpdm)
+    c, cd, L = (np.array(v).ravel() for v in fns["momentum"](x[0].T, x[1].T, b, bd))
+    Xf = [sp.evaluate(P, takeoff + tau_fine, k).T for k in range(3)]
+    bb = ballistic_base(fns, *Xf, tau_fine, b, bd, x[0].T, x[1].T)
+    return {"c_to": c, "cd_to": cd, "L_to": L, "pitch_flight": np.array(bb[0])[2, ::nsub]}

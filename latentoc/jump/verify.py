@@ -1,7 +1,9 @@
 """Post-check of a jump on a 1 kHz grid with numeric Pinocchio (issue 6 verification).
 
 From exported arrays only (``t``, ``q``, ``v``, ``a``, ``wrench`` = the per-foot contact
-wrench at the toe tip, world-aligned, on the 1 kHz grid, ``contact`` flag,
+wrench at the toe tip, world-aligned, on the 1 kHz grid, optionally ``point_forces`` (n, 3, 2):
+the left heel, ball and toe (fx, fz), each acting on its own body, mirrored on the right
+foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
 ``tau_min``/``tau_max``, ``sigma2``, the heel offset and the landing/settle times):
 
 * base-wrench residual: ``max |rnea(q, v, a)[:6] - sum_feet J^T w|`` over all 6 rows, as a
@@ -18,13 +20,15 @@ wrench at the toe tip, world-aligned, on the 1 kHz grid, ``contact`` flag,
   (COM once settled);
 * joint torques ``rnea[6:] - (J^T w)[6:]`` against tau_min, tau_max (joints with a
   non-zero range; the others must vanish by symmetry);
-* the tube: max sigma^2.
+* the tube: max sigma^2;
+* with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights).
 """
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
 
+from .contact import FootGeometry, point_jacobians
 from .support_polygon import margin, support_polygon
 from .training import FOOT, TOE
 from .zmp import G, zmp
@@ -55,6 +59,8 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
     fz_min, ratio_max, cop_margin = np.inf, 0.0, np.inf
     zmp_margin, com_margin = np.inf, np.inf
     act = tmax - tmin > 1e-6
+    points = np.asarray(arrays["point_forces"]) if "point_forces" in arrays else None
+    geom, cone = FootGeometry(heel_off), 0.0
     for i in range(len(t)):
         q, v, a = Q[i], V[i], A[i]
         tau = pin.rnea(model, d, q, v, a)
@@ -62,7 +68,14 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
         pin.framesForwardKinematics(model, d, q)
         JL = pin.getFrameJacobian(model, d, ids["ltoes_end"], pin.LOCAL_WORLD_ALIGNED)
         JR = pin.getFrameJacobian(model, d, ids["rtoes_end"], pin.LOCAL_WORLD_ALIGNED)
-        gen = (JL + JR).T @ Wr[i] if contact[i] else np.zeros(model.nv)
+        if not contact[i]:
+            gen = np.zeros(model.nv)
+        elif points is not None:  # each point force on its own body (heel, ball: foot; toe: toes)
+            Jp = point_jacobians(model, d, q, geom)
+            gen = sum(Jp[k].T @ np.array([points[i, k, 0], 0.0, points[i, k, 1]]) for k in range(3))
+            cone = max(cone, float(np.max(np.abs(points[i, :, 0]) - mu * points[i, :, 1])) / W)
+        else:
+            gen = (JL + JR).T @ Wr[i]
         r = tau[:6] - gen[:6]
         res_max = max(res_max, float(np.max(np.abs(r))) / W)
         if not contact[i]:
@@ -100,7 +113,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
            "max_node_wrench_mismatch": node_mis, "max_lateral_residual": lat_max,
            "min_normal_force": float(fz_min), "max_friction_ratio": ratio_max, "cop_margin": float(cop_margin),
            "zmp_margin": float(zmp_margin), "com_margin": float(com_margin),
-           "max_torque_violation": tau_viol, "max_symmetric_torque": sym_tau}
+           "max_torque_violation": tau_viol, "max_point_cone_violation": cone, "max_symmetric_torque": sym_tau}
     if "sigma2" in arrays:
         out["max_sigma2"] = float(np.max(arrays["sigma2"]))
     return out

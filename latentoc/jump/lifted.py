@@ -1,0 +1,87 @@
+"""Lifted constraint blocks: per-node rows with compiled Jacobians, chained to the NLP variables.
+
+A block is one SX Function ``F(u) -> r`` evaluated at K nodes whose inputs are affine in the
+decision vector, ``u_k = M_k w + c_k``.  Its rows and their Jacobian are::
+
+    g = vec(F(u_1), ..., F(u_K)),   dg/dw = blockdiag(dF/du(u_k)) M
+
+``F`` and ``dF/du`` are generated as C and compiled once (:func:`latentoc.solver.compiled_functions`,
+cached on disk), so a constraint Jacobian costs K compiled node Jacobians and one sparse
+product instead of CasADi's directional derivatives through the whole graph (issue 6: 2.3 s
+per Jacobian of the broad-jump NLP before, see :mod:`.transcription`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ..solver import compiled_function_groups
+
+
+@dataclass
+class NodeRows:
+    """A per-node row Function F(u) (SX, one vector input, one vector output) and its Jacobian."""
+
+    rows: ca.Function
+    jacobian: ca.Function
+
+    @classmethod
+    def from_expression(cls, name: str, u: ca.SX, r: ca.SX) -> "NodeRows":
+        """Rows r(u) and (r, dr/du), with common subexpressions merged (about half the
+        instructions of the contact node's Jacobian, and half the C to compile)."""
+        r1 = ca.cse(r)
+        r2, J = ca.cse([r, ca.jacobian(r, u)])
+        return cls(ca.Function(name, [u], [r1], ["u"], ["r"]),
+                   ca.Function(f"{name}_jac", [u], [r2, J], ["u"], ["r", "J"]))
+
+    @property
+    def n_in(self) -> int:
+        return self.rows.nnz_in(0)
+
+    @property
+    def n_out(self) -> int:
+        return self.rows.nnz_out(0)
+
+
+def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True) -> dict[str, NodeRows]:
+    """The blocks with their Functions compiled to C (one library per block, two compiled at a time)."""
+    if not jit:
+        return dict(blocks)
+    # finite-difference derivatives only so that CasADi can build its Lagrangian-gradient
+    # Function at set-up; Ipopt gets the compiled Jacobians (:func:`lifted_rows`)
+    libs = compiled_function_groups([[b.rows, b.jacobian] for b in blocks.values()],
+                                    external_options={"enable_fd": True})
+    return {name: NodeRows(*fs) for name, fs in zip(blocks, libs)}
+
+
+def affine_map(expr: ca.MX, w: ca.MX) -> tuple[ca.DM, ca.DM]:
+    """(M, c) with vec(expr) = M w + c; raises ValueError if expr is not affine in w."""
+    e = ca.vec(expr)
+    M = ca.evalf(ca.substitute(ca.jacobian(e, w), w, ca.DM.zeros(w.shape)))
+    c = ca.evalf(ca.substitute(e, w, ca.DM.zeros(w.shape)))
+    probe = np.sin(np.arange(w.shape[0]) + 1.0)
+    ref = np.asarray(ca.evalf(ca.substitute(e, w, ca.DM(probe)))).ravel()
+    if not np.allclose(np.asarray(M @ probe + c).ravel(), ref, rtol=1e-10, atol=1e-10):
+        raise ValueError("node inputs are not affine in the decision vector")
+    return ca.sparsify(M), c
+
+
+def lifted_rows(block: NodeRows, U: ca.MX, w: ca.MX) -> tuple[ca.MX, ca.MX]:
+    """(g, dg/dw) of ``block`` at the K columns of U (n_in x K, affine in w), node-major rows."""
+    nu, K = U.shape
+    if nu != block.n_in:
+        raise ValueError(f"block {block.rows.name()} takes {block.n_in} inputs, U has {nu} rows")
+    M, c = affine_map(U, w)
+    Uw = ca.reshape(ca.mtimes(M, w) + c, nu, K)
+    g = ca.vec(block.rows.map(K)(Uw))
+    J = block.jacobian.map(K)(Uw)[1]  # n_out x (nu K)
+    D = ca.diagcat(*ca.horzsplit(J, nu)) if K > 1 else J
+    return g, ca.mtimes(D, M)
+
+
+def select_rows(g: ca.MX, jac: ca.MX, rows: np.ndarray) -> tuple[ca.MX, ca.MX]:
+    """The rows ``rows`` of (g, jac)."""
+    idx = [int(i) for i in rows]
+    return g[idx], jac[idx, :]
