@@ -1,8 +1,9 @@
 """Broad-jump benchmark (issue 6): setup, NLP build and Ipopt solve times per solve.
 
 Target: 20 s or less per solve (paper: 19 s in C++ on a 2014 quad-core i7); the build
-(casadi Functions of the 62-DOF model, GPDM mean derivatives, Ipopt set-up) is reported
-separately.  Run: ``python -m latentoc.benchmarks.jump_bench [--tubes 1.0 0.4] [--quick]``.
+(casadi Functions of the 62-DOF model, GPDM mean derivatives, Ipopt set-up, and once per
+machine the C compilation of the node Jacobians, :mod:`latentoc.jump.lifted`) is reported
+separately, and the time per constraint Jacobian, constraint and gradient evaluation.  Run: ``python -m latentoc.benchmarks.jump_bench [--tubes 1.0 0.4] [--quick]``.
 """
 from __future__ import annotations
 
@@ -32,13 +33,17 @@ def main(argv: list[str] | None = None) -> int:
         else:
             s = JumpSettings(tube=tube, max_iter=args.max_iter, two_phase=not args.one_phase)
         c0 = time.process_time()
-        r = solve_broad_jump(js, s)["result"]
+        out = solve_broad_jump(js, s)
+        r, st = out["result"], out["nlp"].solver.stats()
         p1 = r.get("phase1") or {}
         ph1 = (f"phase 1 {p1['iterations']} it {p1['time_s']:.1f} s {p1['status']} viol {p1['max_constraint_violation']:.1e}; "
                if p1 else "")
         print(f"tube {tube:g}: build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s wall "
               f"({time.process_time() - c0:.1f} s CPU incl. build), {ph1}phase 2 {r['iterations']} it, {r['status']}, "
               f"distance {r['distance']:.3f} m (training {r['distance_initial']:.3f} m)", flush=True)
+        for fn in ("nlp_jac_g", "nlp_g", "nlp_grad_f"):
+            n = max(int(st.get(f"n_call_{fn}", 0)), 1)
+            print(f"  {fn}: {1e3 * st.get(f't_proc_{fn}', 0.0) / n:.1f} ms x {n} calls (phase 2)")
     return 0
 
 

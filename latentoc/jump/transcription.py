@@ -2,11 +2,14 @@
 
 Decision variables
 ------------------
-* the free latent control points P[1:-1] of the B-spline x(t) (m = 11, d = 3; the end
+* the free latent control points P[1:-1] of the B-spline x(t) (m = 21, d = 3; the end
   points stay on the training path, Sect. 4.2 "boundary conditions");
 * the foot pitch splines phi_s (stance) and phi_l (landing) of the toe-pinned anchoring
   (:mod:`.contact`) and the landing toe position x_L;
-* contact force generator weights (6 per contact node) and the touchdown impulse (6).
+* contact force generator weights (6 per contact node: heel, ball and toe on the two edges
+  of their friction pyramid) and the touchdown impulse (6);
+* the flight's takeoff state (COM, COM velocity, angular momentum) and its pitch at the
+  flight nodes, tied to the stance and to the integrated pitch rate by equality rows.
 
 Joint motion: y = mu_Q(x(t)) (GPDM mean, Eq. 18), y' and y'' by the chain rule
 (Eq. 26-28); the right side is the mirror image.  Base: anchored in stance and landing,
@@ -29,11 +32,16 @@ ground penetration in flight, ZMP in the support polygon over the landing and th
 COM in it once the landing has settled (Eq. 35, 36).
 Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
 
-Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): no base variables, and
-the base rows hold at every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with
-the collocated base spline it replaced).  Contact phases: the base rows, cone, CoP, torque
-limits and complementarity hold at the nodes; between nodes the exported motion is checked
-by :mod:`.verify` with the wrench the motion needs.
+Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): the base rows hold at
+every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with the collocated base
+spline it replaced).  Contact phases: the base rows, cone, CoP, torque limits and
+complementarity hold at nodes every 10 ms (node counts 32/20/62); the point forces act on
+their own bodies (heel and ball on the foot, toe tip on the toes), as in the torque-limit
+estimate.  The exported motion is checked on 1 kHz by :mod:`.verify`.
+
+Derivatives (:mod:`.lifted`): every row block is a per-node SX Function of inputs affine in
+the decision vector (contact node, flight node, takeoff, touchdown, pitch rate, tube),
+compiled with its Jacobian to C; Ipopt gets jac_g = blockdiag(dF/du) M and an L-BFGS Hessian.
 
 Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
 
