@@ -210,8 +210,10 @@ def torque_limit_vector(torque_limits: list[float], nv: int) -> np.ndarray | Non
     return np.asarray(torque_limits, dtype=float)
 
 
-def _affine(expr: ca.MX, w: ca.MX) -> tuple[ca.DM, ca.DM]:
-    """(M, c) with expr = M w + c for an MX expression affine in w (checked)."""
+def affine_map(expr: ca.MX, w: ca.MX) -> tuple[ca.DM, ca.DM]:
+    """(M, c) with vec(expr) = M w + c for an MX expression affine in w (checked at a probe
+    point; raises ValueError otherwise)."""
+    expr = ca.vec(expr)
     M = ca.evalf(ca.substitute(ca.jacobian(expr, w), w, ca.DM.zeros(w.shape)))
     c = ca.evalf(ca.substitute(expr, w, ca.DM.zeros(w.shape)))
     probe = np.linspace(-1.0, 1.0, w.shape[0])
@@ -254,7 +256,7 @@ def _lifted_constraints(w: ca.MX, x_w: ca.MX, x: ca.MX, g: ca.MX, lam_g: ca.MX) 
     """(g, dg/dw, d2 (lam_g . g)/dw2) in w for constraints g given as an expression in the
     symbol x (block diagonal per node), x = x_w = M_g w + c_g: CasADi's colouring in x, then
     the chain rule jac = dg/dx M_g, hess = M_g^T (d2 (lam_g . g)/dx2) M_g."""
-    Mg, cg = _affine(x_w, w)
+    Mg, cg = affine_map(x_w, w)
     g_jac = ca.Function("lifted_jac_g", [x], [g, ca.jacobian(g, x)])
     g_hess = ca.Function("lifted_hess_g", [x, lam_g], [ca.hessian(ca.dot(lam_g, g), x)[0]])
     x_w = ca.mtimes(Mg, w) + cg
@@ -310,7 +312,7 @@ def _lifted_derivatives(w: ca.MX, z_w: ca.MX, z: ca.MX, f_grad: ca.Function, f_h
     ``constraints`` = (g, dg/dw, d2 (lam_g . g)/dw2) as expressions in w and the symbol
     lam_g (:func:`_lifted_constraints` or :func:`_grid_constraints`).
     """
-    Mz, _ = _affine(z_w, w)
+    Mz, _ = affine_map(z_w, w)
     lam_f, p = ca.MX.sym("lam_f"), ca.MX.sym("p", 0)
     Jw, gzw = f_grad(z_w)
     Hzw = f_hess(z_w)

@@ -3,7 +3,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from latentoc.jump.lifted import NodeRows, affine_map, compile_node_rows, lifted_rows, select_rows
+from latentoc.jump.lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
+from latentoc.transcription import affine_map
 
 
 def _block() -> NodeRows:

@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from ..solver import compiled_function_groups
+from ..transcription import affine_map
 
 
 @dataclass
@@ -54,18 +55,6 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True) -> dict[str
     libs = compiled_function_groups([[b.rows, b.jacobian] for b in blocks.values()],
                                     external_options={"enable_fd": True})
     return {name: NodeRows(*fs) for name, fs in zip(blocks, libs)}
-
-
-def affine_map(expr: ca.MX, w: ca.MX) -> tuple[ca.DM, ca.DM]:
-    """(M, c) with vec(expr) = M w + c; raises ValueError if expr is not affine in w."""
-    e = ca.vec(expr)
-    M = ca.evalf(ca.substitute(ca.jacobian(e, w), w, ca.DM.zeros(w.shape)))
-    c = ca.evalf(ca.substitute(e, w, ca.DM.zeros(w.shape)))
-    probe = np.sin(np.arange(w.shape[0]) + 1.0)
-    ref = np.asarray(ca.evalf(ca.substitute(e, w, ca.DM(probe)))).ravel()
-    if not np.allclose(np.asarray(M @ probe + c).ravel(), ref, rtol=1e-10, atol=1e-10):
-        raise ValueError("node inputs are not affine in the decision vector")
-    return ca.sparsify(M), c
 
 
 def lifted_rows(block: NodeRows, U: ca.MX, w: ca.MX) -> tuple[ca.MX, ca.MX]:

@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..mocap.jumps import detect_jumps
-from .training import BALL, FOOT, TOE, JumpTraining
+from .training import FOOT, TOE, JumpTraining
 
 
 @dataclass(frozen=True)

@@ -102,8 +102,6 @@ from .torque_limits import TrainingDynamics
 from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]
-CONTACT_ROWS = ("dynamics", "torque", "heel_complementarity", "ball_complementarity", "ball_height", "heel_up",
-                "zmp_polygon", "com_polygon")
 
 
 @dataclass
@@ -359,6 +357,12 @@ def _basis(sp: BSpline, t: np.ndarray, offset: float = 0.0) -> list[np.ndarray]:
     return [sp.basis(np.clip(t - offset, 0, sp.duration), k) for k in range(3)]
 
 
+def _spline_rows(sp: BSpline, C: ca.MX, t: np.ndarray, offset: float = 0.0) -> ca.MX:
+    """Value, first and second time derivative of the spline with coefficients C (m x n) at
+    times t, stacked: (3 n) x K, affine in C."""
+    return ca.vertcat(*[(ca.sparsify(ca.DM(B)) @ C).T for B in _basis(sp, t, offset)])
+
+
 def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]]) -> tuple[list[int], list[str]]:
     """Row indices (node-major) and names of the chosen parts of each node."""
     idx, names = [], []
@@ -407,11 +411,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
                ("c_to", c_to), ("cd_to", cd_to), ("L_to", L_to), ("pitch_flight", pf)]
     w = ca.veccat(*[v for _, v in vblocks])
 
-    def latent(t):
-        return [ca.sparsify(ca.DM(B)) @ Pm for B in _basis(sp, t)]  # each K x d
-
     def lat_rows(t):
-        return ca.vertcat(*[X.T for X in latent(t)])  # 3d x K
+        return _spline_rows(sp, Pm, t)  # (x, xd, xdd): 3d x K
 
     g, jac, names = [], [], []
 
@@ -426,8 +427,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
             names.extend(nm)
 
     # contact nodes: stance (toe at x = 0), landing (toe at x_L)
-    phis = ca.horzcat(*[ca.sparsify(ca.DM(B)) @ cs for B in _basis(sps, ts)]).T
-    phil = ca.horzcat(*[ca.sparsify(ca.DM(B)) @ cl for B in _basis(spl, tl, phases.touchdown)]).T
+    phis, phil = _spline_rows(sps, cs, ts), _spline_rows(spl, cl, tl, phases.touchdown)
     Uc = ca.vertcat(ca.horzcat(lat_rows(ts), lat_rows(tl)), ca.horzcat(phis, phil),
                     ca.horzcat(ca.DM.zeros(1, nS), ca.repmat(xL, 1, nL)), Lam)
     base_rows = ["dynamics"] + (["torque"] if s.torque_limits else []) + \
@@ -441,12 +441,11 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     # flight: takeoff state variables, pitch by the trapezoid rule on a fine grid, nodes
     tau_f = tf - phases.takeoff
     Xto = lat_rows(np.array([phases.takeoff]))
-    phi_to = ca.vertcat(*[ca.sparsify(ca.DM(B)) @ cs for B in _basis(sps, np.array([phases.takeoff]))])
+    phi_to = _spline_rows(sps, cs, np.array([phases.takeoff]))
     add("takeoff_rows", ca.vertcat(Xto, phi_to, c_to, cd_to, L_to, pf[0]), [["takeoff"]])
     nsub = max(1, int(s.flight_substeps))
     tau_fine = np.linspace(0.0, tau_f[-1], (nF - 1) * nsub + 1)
-    nr, layout = blocks["pitch_rate_rows"]
-    gpd, jpd = lifted_rows(nr, ca.vertcat(lat_rows(phases.takeoff + tau_fine), ca.repmat(L_to, 1, len(tau_fine))), w)
+    gpd, jpd = lifted_rows(blocks["pitch_rate_rows"][0], ca.vertcat(lat_rows(phases.takeoff + tau_fine), ca.repmat(L_to, 1, len(tau_fine))), w)
     A = cumulative_trapezoid_matrix(tau_fine)[:, ::nsub].T[1:]  # (nF - 1) x fine: int_0^tau_k pd
     B = ca.horzcat(-ca.DM.ones(nF - 1, 1), ca.DM.eye(nF - 1))  # p_k - p_0
     lin = ca.mtimes(B, pf)
@@ -456,7 +455,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     Uf = ca.vertcat(lat_rows(tf), pf.T, ca.repmat(ca.vertcat(L_to, c_to, cd_to), 1, nF), ca.DM(tau_f).T)
     add("flight_rows", Uf, [(["torque"] if s.torque_limits else []) + (["flight_clearance"] if 0 < k < nF - 1 else [])
                             for k in range(nF)])
-    phi_td = ca.vertcat(*[ca.sparsify(ca.DM(B)) @ cl for B in _basis(spl, np.array([phases.touchdown]), phases.touchdown)])
+    phi_td = _spline_rows(spl, cl, np.array([phases.touchdown]), phases.touchdown)
     Utd = ca.vertcat(lat_rows(np.array([phases.touchdown])), phi_td, xL, pf[-1], L_to, c_to, cd_to,
                      float(tau_f[-1]), Limp)
     add("touchdown_rows", Utd, [["touchdown_position", "impact"]])
@@ -464,7 +463,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     # tube on a dense grid (the end points are fixed on the training path)
     n_tube = max(2, int(round(T / s.tube_spacing)) + 1)
     t_tube = np.linspace(0.0, T, n_tube)[1:-1]
-    add("tube_rows", latent(t_tube)[0].T, [["tube"] for _ in t_tube])
+    add("tube_rows", (ca.sparsify(ca.DM(sp.basis(t_tube, 0))) @ Pm).T, [["tube"] for _ in t_tube])
 
     G_, J_ = ca.vertcat(*g), ca.vertcat(*jac)
     bounds = {"dynamics": (0, 0), "torque": None, "heel_complementarity": (-np.inf, s.complementarity_eps),
