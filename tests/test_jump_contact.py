@@ -69,3 +69,16 @@ def test_point_forces_act_on_their_own_bodies():
     assert np.allclose(gen_sym, ref, atol=1e-9 * np.abs(ref).max())
     num = generator_columns(point_jacobians(model, d, q, geom), 0.4) @ lam
     assert np.allclose(num, ref, atol=1e-9 * np.abs(ref).max())
+
+
+def test_numeric_foot_points_match_the_symbolic_ones():
+    from latentoc.jump.contact import foot_points, points_function
+
+    model, _ = jump_model()
+    tr = training_jumps()[0]
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    sym_points = points_function(SymbolicModel(model), geom)
+    d = model.createData()
+    for i in (0, 40, 90):
+        pin.framesForwardKinematics(model, d, tr.Q[i])
+        assert np.allclose(foot_points(model, d, geom), np.array(sym_points(tr.Q[i])), atol=1e-12)

@@ -149,15 +149,22 @@ def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -
     return gen
 
 
+def foot_points(model: pin.Model, data: pin.Data, geom: FootGeometry) -> np.ndarray:
+    """Numeric (3, 3): world heel, ball, toe of the left foot as columns (frames already placed),
+    the numeric twin of :func:`points_function`."""
+    M = data.oMf[model.getFrameId(FOOT)]
+    return np.column_stack([M.translation + M.rotation @ geom.heel_offset, data.oMf[model.getFrameId(BALL)].translation,
+                            data.oMf[model.getFrameId(TOE)].translation])
+
+
 def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootGeometry) -> np.ndarray:
     """Numeric (3, 3, nv): for heel, ball, toe, the left point's linear Jacobian plus the mirrored
-    right one's, so that ``sum_k J[k].T @ (fx_k, 0, fz_k)`` is :func:`point_generalized_force`."""
+    right one's, so that ``sum_k J[k].T @ (fx_k, 0, fz_k)`` is :func:`point_generalized_force`.
+    Leaves ``data`` with the joint Jacobians and frame placements of ``q``."""
     pin.computeJointJacobians(model, data, q)
     pin.framesForwardKinematics(model, data, q)
     out = np.zeros((3, 3, model.nv))
-    M = data.oMf[model.getFrameId(FOOT)]
-    left = [M.translation + M.rotation @ geom.heel_offset, data.oMf[model.getFrameId(BALL)].translation,
-            data.oMf[model.getFrameId(TOE)].translation]
+    left = foot_points(model, data, geom).T
     for side in "lr":
         for k, frame in enumerate((FOOT, BALL, TOE)):
             fid = model.getFrameId(side + frame[1:])

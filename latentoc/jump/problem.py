@@ -264,7 +264,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     # body weights) at its nodes, interpolated linearly in time within each contact phase, then
     # corrected by the least-norm change of the six edge weights that balances the three
     # sagittal base rows of RNEA exactly (``force_correction`` records its size)
-    from .contact import generator_columns, point_forces, point_jacobians, toe_wrench
+    from .contact import foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 
     grid, W = nlp.meta["grid"], nlp.meta["mass"] * 9.81
     lam_nodes = np.asarray(parts["lam"], float)  # 6 x n_contact_nodes, body weights
@@ -280,7 +280,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     forces = np.zeros((len(t), 3, 2))
     wrench = np.zeros((len(t), 6))
     correction = np.zeros(len(t))
-    P_toe = np.zeros((len(t), 3, 3))
+    P_feet = np.zeros((len(t), 3, 3))
     for i in range(len(t)):
         full = pin.rnea(js.model, d, Q[i], V[i], A[i])
         if st[i] or la[i]:
@@ -293,16 +293,13 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
             full = full - C @ lam_t[i]
             fs = point_forces(lam_t[i] * W, s.mu)
             forces[i] = np.array(fs)
-            M = d.oMf[js.model.getFrameId("lfoot")]
-            P_toe[i] = np.column_stack([M.translation + M.rotation @ js.geom.heel_offset,
-                                        d.oMf[js.model.getFrameId("lfoot_end")].translation,
-                                        d.oMf[js.model.getFrameId("ltoes_end")].translation])
-            wrench[i] = np.array(toe_wrench(lam_t[i] * W, P_toe[i], s.mu)).ravel()
+            P_feet[i] = foot_points(js.model, d, js.geom)  # frames placed by point_jacobians
+            wrench[i] = np.array(toe_wrench(lam_t[i] * W, P_feet[i], s.mu)).ravel()
         tau[i] = full[6:]
     node_w = np.zeros((len(node_t), 6))
     for j, tj in enumerate(node_t):
         i = int(np.argmin(np.abs(t - tj)))
-        node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_toe[i], s.mu)).ravel()
+        node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_feet[i], s.mu)).ravel()
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
             "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
             "sigma2": S2.ravel(), "latent": X, "control_points": P, "node_t": node_t, "node_wrench": node_w,
