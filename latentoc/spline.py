@@ -69,11 +69,12 @@ class BSpline:
             raise SplineInputError(f"control points P has {P.shape[0]} rows, the spline has {self.n_control}")
         return self.basis(t, derivative) @ P
 
-    def fit(self, t: np.ndarray, X: np.ndarray, fix_ends: bool = True) -> np.ndarray:
+    def fit(self, t: np.ndarray, X: np.ndarray, fix_ends: bool = True, smoothing: float = 0.0) -> np.ndarray:
         """Least-squares control points of samples ``X`` (n x d) at times ``t``.
 
         With ``fix_ends`` the first and last control points equal the first and last samples,
-        so the fitted curve passes exactly through the end poses.
+        so the fitted curve passes exactly through the end poses.  ``smoothing`` > 0 adds
+        ``smoothing * int ||x''(t)||^2 dt`` (400-point rule) to the squared residual.
         """
         t = np.asarray(t, dtype=float)
         X = np.asarray(X, dtype=float)
@@ -83,11 +84,18 @@ class BSpline:
             raise SplineInputError(f"fit got {t.size} times but {X.shape[0]} samples")
         if not np.all(np.isfinite(X)):
             raise SplineInputError("fit samples contain NaN or inf")
+        if not smoothing >= 0:
+            raise SplineInputError(f"smoothing must be >= 0, got {smoothing!r}")
         B = self.basis(t)
+        target = X
+        if smoothing > 0:
+            tq = np.linspace(0.0, self.duration, 400)
+            B = np.vstack([B, np.sqrt(smoothing * self.duration / tq.size) * self.basis(tq, 2)])
+            target = np.vstack([X, np.zeros((tq.size, X.shape[1]))])
         if not fix_ends:
-            return np.linalg.lstsq(B, X, rcond=None)[0]
+            return np.linalg.lstsq(B, target, rcond=None)[0]
         P = np.zeros((self.n_control, X.shape[1]))
         P[0], P[-1] = X[0], X[-1]
-        rhs = X - B[:, [0]] * P[0] - B[:, [-1]] * P[-1]
+        rhs = target - B[:, [0]] * P[0] - B[:, [-1]] * P[-1]
         P[1:-1] = np.linalg.lstsq(B[:, 1:-1], rhs, rcond=None)[0]
         return P

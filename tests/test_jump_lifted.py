@@ -36,3 +36,19 @@ def test_affine_map_refuses_nonlinear_inputs():
     assert np.allclose(np.array(M), [[2, 0], [-1, 1]]) and np.allclose(np.array(c).ravel(), [1, 0])
     with pytest.raises(ValueError, match="not affine"):
         affine_map(ca.vertcat(w[0] * w[1]), w)
+
+
+def test_lifted_rows_with_time_scaled_inputs():
+    """Inputs not affine in w (the time scale multiplies the spline derivatives): the chain
+    rule through CasADi's dU/dw against CasADi's Jacobian of the composed rows."""
+    block = compile_node_rows({"toy": _block()}, jit=False)["toy"]
+    w = ca.MX.sym("w", 4)
+    ik = 1 / w[3]
+    U = ca.horzcat(*[ca.vertcat(w[0] + k, ik * w[1], ik ** 2 * w[2] * k) for k in range(3)])
+    g, J = lifted_rows(block, U, w, affine=False)
+    ref = ca.vec(_block().rows.map(3)(U))
+    x = np.array([0.3, -0.2, 0.5, 0.9])
+    g1, J1, g2, J2 = (np.array(v) for v in ca.Function("f", [w], [g, J, ref, ca.jacobian(ref, w)])(x))
+    assert np.allclose(g1, g2, atol=1e-12) and np.allclose(J1, J2, atol=1e-10)
+    with pytest.raises(ValueError, match="not affine"):
+        lifted_rows(block, U, w)

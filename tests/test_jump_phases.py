@@ -23,3 +23,32 @@ def test_phases_and_grid():
     g = ph.grid(5, 4, 6)
     assert g["stance"][-1] == g["flight"][0] and g["flight"][-1] == g["land"][0]
     assert smap.n_learned == 37 and tr.Y.shape == (157, 37)
+
+
+def test_contact_schedule_follows_the_training_heel_and_ball():
+    """The heel and ball carry force only while the training motion has them on the ground:
+    checked against their heights recomputed from the frames with numeric Pinocchio."""
+    import pinocchio as pin
+
+    from latentoc.jump.contact import FootGeometry, foot_points
+    from latentoc.jump.phases import CONTACT_HEIGHT
+
+    model, _ = jump_model()
+    tr = training_jumps()[0]
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    ph = training_phases(model, tr, geom=geom)
+    d = model.createData()
+    H = np.array([foot_points(model, d, geom)[2] for q in tr.Q if pin.framesForwardKinematics(model, d, q) is None])
+    H -= H[0]
+    assert 0 < ph.heel_off < ph.ball_off <= ph.takeoff < ph.touchdown <= ph.ball_strike < ph.heel_strike < ph.duration
+    for k, (off, strike) in enumerate(((ph.heel_off, ph.heel_strike), (ph.ball_off, ph.ball_strike))):
+        stance = tr.t <= off + 1e-9
+        assert np.all(H[stance, k] <= CONTACT_HEIGHT)  # on the ground until it leaves
+        i_up = int(np.argmax(tr.t > off + 1e-9))
+        assert H[i_up, k] > CONTACT_HEIGHT  # and the next frame it is up
+        assert np.all(H[(tr.t >= strike - 1e-9) & (tr.t <= strike + 0.05), k] <= CONTACT_HEIGHT)
+        assert H[int(np.argmax(tr.t >= strike - 1e-9)) - 1, k] > CONTACT_HEIGHT or strike == ph.touchdown
+    t = np.array([0.0, ph.heel_off + 0.01, ph.takeoff, ph.heel_strike])
+    assert ph.loaded("heel", t).tolist() == [True, False, False, True]
+    assert ph.loaded("toe", t).all()
+    assert training_phases(model, tr).loaded("heel", t).all()  # no geometry, no schedule

@@ -14,9 +14,16 @@ def test_consistent_start_fits_nonnegative_forces():
     g0, g1 = (np.array(nlp.meta["g_fun"](v)).ravel() for v in (nlp.x0, x))
     a, b = nlp.meta["sizes"]["lam"]
     assert np.all(x[a:b] >= 0)
+    # contact schedule: the heel is unloaded at the stance's last node (after heel-off) and the
+    # landing's first (before heel strike); those generators are bounded to zero and stay zero
+    tc = np.concatenate([nlp.meta["grid"]["stance"], nlp.meta["grid"]["land"]])
+    ub = nlp.ubx[a:b].reshape(-1, 6)
+    assert np.array_equal(ub[:, 0] == 0, ~js.phases.loaded("heel", tc)) and (ub[:, 0] == 0).sum() >= 2
+    assert np.array_equal(ub[:, 2] == 0, ~js.phases.loaded("ball", tc)) and np.all(ub[:, 4] > 0)
+    assert np.all(x[a:b][nlp.ubx[a:b] == 0] == 0)
     # the base-row residual of every contact node is no worse than with the uniform guess
     d0, d1 = (np.abs(g[names == "dynamics"]).reshape(-1, 3) for g in (g0, g1))
-    assert d0.shape[0] == 5 + 6
+    assert d0.shape[0] == len(nlp.meta["grid"]["stance"]) + 6 >= 5 + 6
     assert np.all(np.linalg.norm(d1, axis=1) <= np.linalg.norm(d0, axis=1) + 1e-9)
     assert np.linalg.norm(d1) < np.linalg.norm(d0)
 
@@ -60,3 +67,26 @@ def test_lifted_jacobian_matches_finite_differences():
         fd = (np.array(g(x + h * dv)).ravel() - np.array(g(x - h * dv)).ravel()) / (2 * h)
         an = J @ dv
         assert np.max(np.abs(fd - an)) <= 1e-6 * np.max(np.abs(an))
+
+
+def test_time_scaled_export_is_differentiable_in_real_time():
+    """With time scale k the exported motion lasts k T, and its v and a are the real-time
+    derivatives of q (central differences with pinocchio.difference on the 1 kHz grid)."""
+    import pinocchio as pin
+
+    from latentoc.jump.problem import trajectory
+
+    js = setup()
+    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    x = consistent_start(nlp, nlp.x0)
+    x[slice(*nlp.meta["sizes"]["time_scale"])] = 1.1
+    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(x))}
+    tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
+    t, Q, V, A = tr["t"], tr["q"], tr["v"], tr["a"]
+    assert np.isclose(t[-1], 1.1 * js.phases.duration) and np.isclose(tr["takeoff"], 1.1 * js.phases.takeoff)
+    h = t[1] - t[0]
+    for i in (100, 500, 1000, 1300):  # stance, flight, landing
+        vd = pin.difference(js.model, Q[i - 1], Q[i + 1]) / (2 * h)
+        assert np.allclose(vd, V[i], atol=2e-3 * max(1.0, np.abs(V[i]).max()))
+        assert np.allclose((V[i + 1] - V[i - 1]) / (2 * h), A[i], atol=2e-2 * max(1.0, np.abs(A[i]).max()))

@@ -27,3 +27,26 @@ def test_training_forces_and_limits():
     # lateral rows vanish by symmetry; limits enclose the training torques
     assert np.max(np.abs(td.base_residual[:, [1, 3, 5]])) < 1e-6 * W
     assert np.all(td.tau_min <= td.tau.min(0) + 1e-9) and np.all(td.tau_max >= td.tau.max(0) - 1e-9)
+    # the margin: max(margin * peak, floor) on each side of every loaded joint, 0 on the others
+    wide = estimate_training_dynamics(model, smap, tr, geom, contact, margin=0.1, floor=5.0)
+    peak = np.max(np.abs(td.tau), axis=0)
+    pad = np.where(peak > 1e-9, np.maximum(0.1 * peak, 5.0), 0.0)
+    assert np.allclose(wide.tau_max - td.tau_max, pad) and np.allclose(td.tau_min - wide.tau_min, pad)
+    assert np.any((peak > 1e-9) & (0.1 * peak < 5.0)) and np.any(0.1 * peak > 5.0)
+
+
+def test_schedule_unloads_the_heel_after_heel_off():
+    """With the contact schedule the heel carries no force after heel-off (and the ball none
+    after ball-off); the toe alone must then balance what it can."""
+    from latentoc.jump.contact import FootGeometry as FG
+    model, smap = jump_model()
+    tr = training_jumps()[0]
+    geom = FG.from_standing(model, tr.Q[0])
+    ph = training_phases(model, tr, geom=geom)
+    contact = (tr.t <= ph.takeoff) | (tr.t >= ph.touchdown)
+    loaded = np.column_stack([ph.loaded(k, tr.t) for k in ("heel", "ball", "toe")])
+    td = estimate_training_dynamics(model, smap, tr, geom, contact, loaded=loaded)
+    off = contact & ~loaded[:, 0]
+    assert off.sum() > 5 and np.all(td.forces[off, 0, :] == 0)
+    assert np.all(td.forces[contact & ~loaded[:, 1], 1, :] == 0)
+    assert np.any(td.forces[contact & loaded[:, 0], 0, 1] > 0)

@@ -79,7 +79,7 @@ def test_quick_solve_verifies():
     from latentoc.problem import load_problem
     from latentoc.solve import solve
     p = load_problem("broad-jump")
-    p.options.update(torque_limits=False, polygon=False, complementarity=False)
+    p.options.update(torque_limits=False, polygon=False, contact_model="free")
     r = solve(p, tube=0.2).result
     assert r["success"] and r["max_dynamics_residual"] < 0.2 and r["max_lateral_residual"] < 1e-6
 

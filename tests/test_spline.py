@@ -42,3 +42,25 @@ def test_bad_input():
         BSpline(5, -1.0)
     with pytest.raises(SplineInputError, match="NaN"):
         BSpline(5, 1.0).fit(np.linspace(0, 1, 10), np.full((10, 2), np.nan))
+
+
+def test_smoothing_trades_fit_for_curvature_and_tends_to_the_line():
+    """The smoothing penalty lowers int ||x''||^2 monotonically; a huge one leaves the straight
+    line through the fixed end samples (analytic: the clamped spline reproduces linear functions)."""
+    sp = BSpline(12, 2.0)
+    t = np.linspace(0.0, 2.0, 80)
+    rng = np.random.default_rng(0)
+    X = np.column_stack([np.sin(3 * t), t ** 2]) + 0.05 * rng.standard_normal((80, 2))
+    tq = np.linspace(0.0, 2.0, 2001)
+
+    def curvature(P):
+        return np.trapezoid(np.sum(sp.evaluate(P, tq, 2) ** 2, axis=1), tq)
+
+    c = [curvature(sp.fit(t, X, smoothing=lam)) for lam in (0.0, 1e-4, 1e-2, 1.0)]
+    assert np.all(np.diff(c) < 0)
+    assert np.allclose(sp.fit(t, X, smoothing=0.0), sp.fit(t, X))
+    P = sp.fit(t, X, smoothing=1e9)
+    line = X[0] + (X[-1] - X[0]) * (tq / 2.0)[:, None]
+    assert np.max(np.abs(sp.evaluate(P, tq) - line)) < 1e-4
+    with pytest.raises(SplineInputError, match="smoothing"):
+        sp.fit(t, X, smoothing=-1.0)

@@ -19,7 +19,7 @@ def main(argv: list[str] | None = None) -> int:
 
     ap = argparse.ArgumentParser(prog="jump_bench", description=__doc__.splitlines()[0])
     ap.add_argument("--tubes", type=float, nargs="+", default=[1.0])
-    ap.add_argument("--quick", action="store_true", help="small node count (6/6/8), no torque/polygon/complementarity")
+    ap.add_argument("--quick", action="store_true", help="small node count (6/6/8), no torque/polygon limits, no contact schedule")
     ap.add_argument("--max-iter", type=int, default=400)
     ap.add_argument("--one-phase", action="store_true", help="skip the phase-1 feasibility solve")
     args = ap.parse_args(argv)
@@ -29,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     for tube in args.tubes:
         if args.quick:
             s = JumpSettings(tube=tube, n_stance=6, n_flight=6, n_land=8, torque_limits=False, polygon=False,
-                             complementarity=False, max_iter=args.max_iter, two_phase=not args.one_phase)
+                             contact_model="free", max_iter=args.max_iter, two_phase=not args.one_phase)
         else:
             s = JumpSettings(tube=tube, max_iter=args.max_iter, two_phase=not args.one_phase)
         c0 = time.process_time()

@@ -21,8 +21,9 @@ pyramid written with its two edge generators ``lam1 (mu, 1) + lam2 (-mu, 1)``,
 ``lam >= 0``.  In the sagittal plane this pyramid *is* the exact cone ``|fx| <= mu fz``;
 lateral forces are zero by symmetry.  Unilateral forces and the centre of pressure
 inside the foot (between heel and toe) follow from ``lam >= 0``.  The heel and ball can
-push only when they are on the ground: relaxed complementarity
-``(lam_heel1 + lam_heel2) * z_heel <= eps`` (same for the ball), with ``z_heel >= 0``
+push only when they are on the ground: by the training motion's contact schedule
+(:mod:`.phases`, the default) or by relaxed complementarity
+``(lam_heel1 + lam_heel2) * z_heel <= eps`` (same for the ball); always ``z_heel >= 0``
 (``phi >= 0``) and ``z_ball >= -ball_tolerance`` (soft sole under the ball).
 """
 from __future__ import annotations

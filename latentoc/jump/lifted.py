@@ -5,6 +5,8 @@ decision vector, ``u_k = M_k w + c_k``.  Its rows and their Jacobian are::
 
     g = vec(F(u_1), ..., F(u_K)),   dg/dw = blockdiag(dF/du(u_k)) M
 
+(with a time scale the inputs are not affine and M is replaced by the sparse dU/dw).
+
 ``F`` and ``dF/du`` are generated as C and compiled once (:func:`latentoc.solver.compiled_functions`,
 cached on disk), so a constraint Jacobian costs K compiled node Jacobians and one sparse
 product instead of CasADi's directional derivatives through the whole graph (issue 6: 2.3 s
@@ -57,13 +59,20 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True) -> dict[str
     return {name: NodeRows(*fs) for name, fs in zip(blocks, libs)}
 
 
-def lifted_rows(block: NodeRows, U: ca.MX, w: ca.MX) -> tuple[ca.MX, ca.MX]:
-    """(g, dg/dw) of ``block`` at the K columns of U (n_in x K, affine in w), node-major rows."""
+def lifted_rows(block: NodeRows, U: ca.MX, w: ca.MX, affine: bool = True) -> tuple[ca.MX, ca.MX]:
+    """(g, dg/dw) of ``block`` at the K columns of U (n_in x K), node-major rows.
+
+    ``affine``: U is affine in w (checked) and dU/dw = M is a constant matrix; otherwise
+    (the time-scaled inputs of :mod:`.transcription`) dU/dw is CasADi's sparse Jacobian of U.
+    """
     nu, K = U.shape
     if nu != block.n_in:
         raise ValueError(f"block {block.rows.name()} takes {block.n_in} inputs, U has {nu} rows")
-    M, c = affine_map(U, w)
-    Uw = ca.reshape(ca.mtimes(M, w) + c, nu, K)
+    if affine:
+        M, c = affine_map(U, w)
+        Uw = ca.reshape(ca.mtimes(M, w) + c, nu, K)
+    else:
+        M, Uw = ca.jacobian(ca.vec(U), w), U
     g = ca.vec(block.rows.map(K)(Uw))
     J = block.jacobian.map(K)(Uw)[1]  # n_out x (nu K)
     D = ca.diagcat(*ca.horzsplit(J, nu)) if K > 1 else J

@@ -11,6 +11,12 @@ takeoff velocity, measured in issue 6); touchdown is the first frame after the d
 at which the toe tip is back at its standing height (0.692 s).
 The landing is "settled" (Eq. 36's COM-in-polygon constraint applies) from the first
 training frame after touchdown at which the projected COM is inside the feet's polygon.
+Contact schedule: the heel and the ball carry force only while they are on the ground in the
+training motion (within ``CONTACT_HEIGHT`` of their standing height): the heel until
+``heel_off`` (0.200 s on the paper's jump) and again from ``heel_strike`` (0.792 s), the ball
+until ``ball_off`` (0.267 s) and from ``ball_strike`` (0.717 s); the toe tip carries force in
+every contact node.  A fixed contact sequence keeps the NLP free of complementarity rows,
+whose degenerate multipliers stalled Ipopt (measured in issue 6).
 Nodes: ``n_stance`` on [0, t_to], ``n_flight`` on [t_to, t_td], ``n_land`` on [t_td, T]
 (the phase boundaries appear in both neighbouring phases).
 """
@@ -22,7 +28,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..mocap.jumps import detect_jumps
+from .contact import FootGeometry, foot_points
 from .training import FOOT, TOE, JumpTraining
+
+CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
 
 
 @dataclass(frozen=True)
@@ -33,10 +42,29 @@ class Phases:
     touchdown: float
     settle: float
     duration: float
+    heel_off: float | None = None  # contact schedule (module doc); None: no schedule
+    ball_off: float | None = None
+    ball_strike: float | None = None
+    heel_strike: float | None = None
 
-    def grid(self, n_stance: int, n_flight: int, n_land: int) -> dict[str, np.ndarray]:
-        return {"stance": np.linspace(0.0, self.takeoff, n_stance),
-                "flight": np.linspace(self.takeoff, self.touchdown, n_flight),
+    def loaded(self, point: str, t: np.ndarray) -> np.ndarray:
+        """Whether ``point`` ("heel", "ball" or "toe") may carry force at contact times ``t``."""
+        t = np.asarray(t, float)
+        if point == "toe" or self.heel_off is None:
+            return np.ones(t.shape, bool)
+        off, strike = {"heel": (self.heel_off, self.heel_strike), "ball": (self.ball_off, self.ball_strike)}[point]
+        return (t <= off + 1e-9) | (t >= strike - 1e-9)
+
+    def grid(self, n_stance: int, n_flight: int, n_land: int, push_off: tuple[float, int] = (0.0, 0)
+             ) -> dict[str, np.ndarray]:
+        """Node times; ``push_off = (span, n)`` adds n more stance nodes, evenly spaced, in the
+        last ``span`` seconds before takeoff, where the contact force falls fastest."""
+        stance = np.linspace(0.0, self.takeoff, n_stance)
+        span, n = push_off
+        if span > 0 and n > 0:
+            extra = np.linspace(self.takeoff - span, self.takeoff, n + 2)[1:-1]
+            stance = np.unique(np.concatenate([stance, extra]).round(12))
+        return {"stance": stance, "flight": np.linspace(self.takeoff, self.touchdown, n_flight),
                 "land": np.linspace(self.touchdown, self.duration, n_land)}
 
 
@@ -51,8 +79,35 @@ def toe_heights(model: pin.Model, Q: np.ndarray) -> np.ndarray:
     return out
 
 
-def training_phases(model: pin.Model, tr: JumpTraining, fps: float = 120.0) -> Phases:
-    """Phases of a symmetric training jump: toe-off, toe touchdown, settle (see module doc)."""
+def contact_schedule(model: pin.Model, tr: JumpTraining, geom: FootGeometry, takeoff: float,
+                     touchdown: float) -> dict[str, float]:
+    """Heel and ball contact times of the training motion (module doc): the last stance frame
+    before the point first rises ``CONTACT_HEIGHT`` above its standing height, and the first
+    landing frame from which it stays below that height for 50 ms."""
+    d = model.createData()
+    H = np.zeros((len(tr.Q), 3))
+    for i, q in enumerate(tr.Q):
+        pin.framesForwardKinematics(model, d, q)
+        H[i] = foot_points(model, d, geom)[2]
+    up = H - H[0] > CONTACT_HEIGHT
+    n_hold = max(1, int(round(0.05 / (tr.t[1] - tr.t[0]))))
+    out = {}
+    for k, name in ((0, "heel"), (1, "ball")):
+        first_up = int(np.argmax(up[:, k] & (tr.t <= takeoff + 1e-9)))
+        out[f"{name}_off"] = float(min(tr.t[max(first_up - 1, 0)], takeoff)) if up[first_up, k] else takeoff
+        strike = touchdown
+        for i in np.where(tr.t >= touchdown - 1e-9)[0]:
+            if not up[i:i + n_hold, k].any():
+                strike = float(tr.t[i])
+                break
+        out[f"{name}_strike"] = strike
+    return out
+
+
+def training_phases(model: pin.Model, tr: JumpTraining, fps: float = 120.0,
+                    geom: FootGeometry | None = None) -> Phases:
+    """Phases of a symmetric training jump: toe-off, toe touchdown, settle and, with ``geom``,
+    the heel and ball contact schedule (see module doc)."""
     jumps = detect_jumps(model, tr.Q, fps)
     if not jumps:
         raise ValueError("no jump detected in the training motion")
@@ -74,4 +129,6 @@ def training_phases(model: pin.Model, tr: JumpTraining, fps: float = 120.0) -> P
             break
     if settle is None:
         settle = tr.t[-1]
-    return Phases(float(tr.t[i_off]), float(tr.t[i_td]), float(settle), tr.duration)
+    takeoff, touchdown = float(tr.t[i_off]), float(tr.t[i_td])
+    sched = contact_schedule(model, tr, geom, takeoff, touchdown) if geom is not None else {}
+    return Phases(takeoff, touchdown, float(settle), tr.duration, **sched)

@@ -5,9 +5,12 @@ its learned coordinates and sagittal base, giving v and a.  At each frame in con
 contact forces are estimated by non-negative least squares: the heel, ball and toe of both
 feet each push with ``lam1 (mu, 1) + lam2 (-mu, 1)``, ``lam >= 0`` (so the fitted forces are
 unilateral, inside the friction cone mu = 0.4 and the centre of pressure is inside the foot)
-and the base rows of RNEA are matched, ``rnea_base = sum J^T f``.  In flight f = 0.  The
+and the base rows of RNEA are matched, ``rnea_base = sum J^T f``; with ``loaded`` only the
+points the contact schedule loads push (:mod:`.phases`), as in the NLP.  In flight f = 0.  The
 joint torques are ``tau = rnea_joint - (J^T f)_joint``; the limits are their per-joint
-minimum and maximum over the motion, widened by ``margin`` times the joint's peak |tau|.
+minimum and maximum over the motion, widened by ``margin`` times the joint's peak |tau|, at
+least ``floor`` N m: the head and neck carry 2-10 N m, and 10 % of that bound the whole jump
+(the head's limit had the largest multiplier at the optimum, measured in issue 6).
 """
 from __future__ import annotations
 
@@ -48,8 +51,12 @@ def smoothed_motion(tr: JumpTraining, E: np.ndarray, n_control: int = 40):
 
 def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: FootGeometry,
                                in_contact: np.ndarray, mu: float = MU, margin: float = 0.1,
-                               n_control: int = 40) -> TrainingDynamics:
-    """Least-squares (NNLS) contact forces and joint torques of the training motion."""
+                               n_control: int = 40, loaded: np.ndarray | None = None,
+                               floor: float = 0.0) -> TrainingDynamics:
+    """Least-squares (NNLS) contact forces and joint torques of the training motion.
+
+    ``loaded`` (n frames x 3: heel, ball, toe) marks the points that may push; default all.
+    Each loaded joint's range is widened by ``max(margin * peak, floor)`` on both sides."""
     E = joint_embedding(smap)
     Q, V, A = smoothed_motion(tr, E, n_control)
     d = model.createData()
@@ -61,7 +68,9 @@ def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: F
         if in_contact[i]:
             Acols = generator_columns(point_jacobians(model, d, Q[i], geom), mu)
             rows = [0, 2, 4]
-            lam, _ = nnls(Acols[rows], tau[rows])
+            cols = np.repeat(np.ones(3, bool) if loaded is None else np.asarray(loaded[i], bool), 2)
+            lam = np.zeros(6)
+            lam[cols] = nnls(Acols[rows][:, cols], tau[rows])[0]
             gf = Acols @ lam
             forces[i] = (G @ lam.reshape(3, 2).T).T
         else:
@@ -69,4 +78,5 @@ def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: F
         res[i] = tau[:6] - gf[:6]
         taus[i] = tau[6:] - gf[6:]
     peak = np.max(np.abs(taus), axis=0)
-    return TrainingDynamics(tr.t, taus, forces, res, taus.min(0) - margin * peak, taus.max(0) + margin * peak)
+    pad = np.where(peak > 1e-9, np.maximum(margin * peak, floor), 0.0)  # unloaded (mirrored) joints stay 0
+    return TrainingDynamics(tr.t, taus, forces, res, taus.min(0) - pad, taus.max(0) + pad)

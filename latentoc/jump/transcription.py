@@ -10,6 +10,12 @@ Decision variables
   of their friction pyramid) and the touchdown impulse (6);
 * the flight's takeoff state (COM, COM velocity, angular momentum) and its pitch at the
   flight nodes, tied to the stance and to the integrated pitch rate by equality rows.
+* the time scale k (``JumpSettings.time_scale``, bounds 0.85-1.15): the motion runs in real
+  time t = k s of the training's time s, so every phase lasts k times its training duration
+  and the flight time is free.  Splines stay in s; real-time derivatives carry 1/k and
+  1/k^2.  With the phase durations fixed (k = 1) the ballistic flight could not both leave
+  the toe-pinned stance and meet the toe-pinned landing: Ipopt's restoration ended at a
+  takeoff COM height mismatch of 2.3 cm, every other row satisfied (measured, issue 6).
 
 Joint motion: y = mu_Q(x(t)) (GPDM mean, Eq. 18), y' and y'' by the chain rule
 (Eq. 26-28); the right side is the mirror image.  Base: anchored in stance and landing,
@@ -27,7 +33,9 @@ flight, which the fixed phase sequence excludes.
 
 Constraints (hard): base rows (sagittal x, z, pitch; the lateral rows vanish by symmetry
 and are checked in :mod:`.verify`), tube sigma^2 <= delta (Eq. 29), torque limits (Eq. 34),
-contact-force cone/unilateral/CoP (by the generators), heel/toe complementarity, no
+contact-force cone/unilateral/CoP (by the generators), the contact schedule (a loaded heel
+keeps the foot flat, a loaded ball stays on the ground, unloaded points carry no force;
+:mod:`.phases`; ``contact_model="complementarity"`` keeps the earlier relaxed complementarity), no
 ground penetration in flight, ZMP in the support polygon over the landing and the projected
 COM in it once the landing has settled (Eq. 35, 36).
 Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
@@ -35,7 +43,7 @@ Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
 Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): the base rows hold at
 every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with the collocated base
 spline it replaced).  Contact phases: the base rows, cone, CoP, torque limits and
-complementarity hold at nodes every 10 ms (node counts 32/20/62); the point forces act on
+contact schedule hold at nodes every 10 ms (node counts 32/20/62); the point forces act on
 their own bodies (heel and ball on the foot, toe tip on the toes), as in the torque-limit
 estimate.  The exported motion is checked on 1 kHz by :mod:`.verify`.
 
@@ -112,21 +120,26 @@ class JumpSettings:
     mu: float = MU
     n_control: int = 21  # paper 11; 11 cannot follow the push-off (see the module doc)
     n_stance: int = 32  # contact nodes every 10 ms: sparser grids let the motion wobble between nodes
+    push_off_nodes: tuple[float, int] = (0.0, 0)  # (span s, n): n more stance nodes just before takeoff
     n_flight: int = 20
     n_land: int = 62
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
-    complementarity_eps: float = 1e-4  # body weights x metres
-    ball_tolerance: float = 0.02
+    contact_model: str = "schedule"  # "schedule" (training contact times), "complementarity" or "free"
+    complementarity_eps: float = 1e-4  # body weights x metres ("complementarity" only)
+    ball_tolerance: float = 0.02  # m the ball may sink below the ground (the toe joint's capture noise)
+    contact_tolerance: float = 0.01  # m: a loaded ball stays within this of the ground ("schedule")
+    flat_foot_pitch: float = 0.05  # rad: a loaded heel keeps the foot this flat ("schedule", ~1 cm at the heel)
     tube_spacing: float = 0.005  # s; the tube (cheap: GP variance only) on this grid, not only at nodes
     max_iter: int = 400
     tol: float = 1e-5
     hessian: str = "limited-memory"  # the only one: the lifted rows give first derivatives only
     print_level: int = 0
     torque_limits: bool = True
-    complementarity: bool = True
     polygon: bool = True
+    time_scale: bool = True  # one free factor k on the durations of all phases (t = k s, module doc)
+    time_scale_bounds: tuple[float, float] = (0.85, 1.15)
     two_phase: bool = True  # phase 1 feasibility near the training fit, then phase 2 max distance
     jit: bool = True  # node rows and Jacobians compiled to C (:mod:`.lifted`)
 
@@ -202,8 +215,9 @@ class RowModel:
         return np.maximum(self.limits.tau_max[a] - self.limits.tau_min[a], 1.0)
 
     def torque_rows(self, tau_joint):
-        a = self.active
-        return tau_joint[a.tolist()] / ca.DM(self.torque_scale)
+        """Joint torques of the active joints in N m; build_nlp scales them by the limit range
+        outside the compiled rows, so that new limits (margins) need no new C code."""
+        return tau_joint[self.active.tolist()]
 
 
 def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
@@ -363,6 +377,14 @@ def _spline_rows(sp: BSpline, C: ca.MX, t: np.ndarray, offset: float = 0.0) -> c
     return ca.vertcat(*[(ca.sparsify(ca.DM(B)) @ C).T for B in _basis(sp, t, offset)])
 
 
+def _time_scaled(R: ca.MX, n: int, ik) -> ca.MX:
+    """Rows (value, d/ds, d2/ds2; n each) of a spline in nominal time s as real-time ones,
+    t = k s: the derivatives times 1/k and 1/k^2 (``ik`` = 1/k, None for k = 1)."""
+    if ik is None:
+        return R
+    return ca.vertcat(R[:n, :], ik * R[n:2 * n, :], ik ** 2 * R[2 * n:, :])
+
+
 def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]]) -> tuple[list[int], list[str]]:
     """Row indices (node-major) and names of the chosen parts of each node."""
     idx, names = [], []
@@ -387,7 +409,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     rm = RowModel(sym, smap, gpdm, geom, limits, s.mu, mass)
     blocks = node_rows(rm, jit=s.jit)
     dlat = gpdm.latent_dim
-    grid = phases.grid(s.n_stance, s.n_flight, s.n_land)
+    grid = phases.grid(s.n_stance, s.n_flight, s.n_land, s.push_off_nodes)
     T = phases.duration
     sp = BSpline(s.n_control, T)
     sps = BSpline(s.n_phi_stance, phases.takeoff)
@@ -409,16 +431,22 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     pf = ca.MX.sym("pitch_flight", nF)
     vblocks = [("P", Pfree), ("phi_s", cs), ("phi_l", cl), ("x_L", xL), ("lam", Lam), ("lam_impact", Limp),
                ("c_to", c_to), ("cd_to", cd_to), ("L_to", L_to), ("pitch_flight", pf)]
+    if s.time_scale:
+        kt = ca.MX.sym("time_scale")
+        vblocks.append(("time_scale", kt))
+        ik, affine = 1 / kt, False
+    else:
+        kt, ik, affine = ca.MX(1.0), None, True
     w = ca.veccat(*[v for _, v in vblocks])
 
     def lat_rows(t):
-        return _spline_rows(sp, Pm, t)  # (x, xd, xdd): 3d x K
+        return _time_scaled(_spline_rows(sp, Pm, t), dlat, ik)  # (x, xd, xdd) in real time: 3d x K
 
     g, jac, names = [], [], []
 
-    def add(block: str, U: ca.MX, per_node: list[list[str]]):
+    def add(block: str, U: ca.MX, per_node: list[list[str]], affine: bool = affine):
         nr, layout = blocks[block]
-        gb, jb = lifted_rows(nr, U, w)
+        gb, jb = lifted_rows(nr, U, w, affine)
         idx, nm = _layout_indices(layout, nr.n_out, U.shape[1], per_node)
         if idx:
             gi, ji = select_rows(gb, jb, np.array(idx))
@@ -427,11 +455,15 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
             names.extend(nm)
 
     # contact nodes: stance (toe at x = 0), landing (toe at x_L)
-    phis, phil = _spline_rows(sps, cs, ts), _spline_rows(spl, cl, tl, phases.touchdown)
+    phis = _time_scaled(_spline_rows(sps, cs, ts), 1, ik)
+    phil = _time_scaled(_spline_rows(spl, cl, tl, phases.touchdown), 1, ik)
     Uc = ca.vertcat(ca.horzcat(lat_rows(ts), lat_rows(tl)), ca.horzcat(phis, phil),
                     ca.horzcat(ca.DM.zeros(1, nS), ca.repmat(xL, 1, nL)), Lam)
+    if s.contact_model not in ("schedule", "complementarity", "free"):
+        raise ValueError(f"contact_model must be 'schedule', 'complementarity' or 'free', got {s.contact_model!r}")
     base_rows = ["dynamics"] + (["torque"] if s.torque_limits else []) + \
-                (["heel_complementarity", "ball_complementarity"] if s.complementarity else []) + ["ball_height", "heel_up"]
+                (["heel_complementarity", "ball_complementarity"] if s.contact_model == "complementarity" else []) + \
+                ["ball_height", "heel_up"]
     per_node = [list(base_rows) for _ in range(nS)]
     for tk in tl:
         extra = (["zmp_polygon"] + (["com_polygon"] if tk >= phases.settle - 1e-9 else [])) if s.polygon else []
@@ -441,31 +473,38 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     # flight: takeoff state variables, pitch by the trapezoid rule on a fine grid, nodes
     tau_f = tf - phases.takeoff
     Xto = lat_rows(np.array([phases.takeoff]))
-    phi_to = _spline_rows(sps, cs, np.array([phases.takeoff]))
+    phi_to = _time_scaled(_spline_rows(sps, cs, np.array([phases.takeoff])), 1, ik)
     add("takeoff_rows", ca.vertcat(Xto, phi_to, c_to, cd_to, L_to, pf[0]), [["takeoff"]])
     nsub = max(1, int(s.flight_substeps))
     tau_fine = np.linspace(0.0, tau_f[-1], (nF - 1) * nsub + 1)
-    gpd, jpd = lifted_rows(blocks["pitch_rate_rows"][0], ca.vertcat(lat_rows(phases.takeoff + tau_fine), ca.repmat(L_to, 1, len(tau_fine))), w)
-    A = cumulative_trapezoid_matrix(tau_fine)[:, ::nsub].T[1:]  # (nF - 1) x fine: int_0^tau_k pd
+    gpd, jpd = lifted_rows(blocks["pitch_rate_rows"][0], ca.vertcat(lat_rows(phases.takeoff + tau_fine),
+                                                                     ca.repmat(L_to, 1, len(tau_fine))), w, affine)
+    A = ca.DM(cumulative_trapezoid_matrix(tau_fine)[:, ::nsub].T[1:])  # (nF - 1) x fine: int_0^tau_k pd ds
     B = ca.horzcat(-ca.DM.ones(nF - 1, 1), ca.DM.eye(nF - 1))  # p_k - p_0
     lin = ca.mtimes(B, pf)
-    g.append(lin - ca.mtimes(ca.DM(A), gpd))
-    jac.append(ca.jacobian(lin, w) - ca.mtimes(ca.DM(A), jpd))
+    Apd = ca.mtimes(A, gpd)  # real time: the integral times k
+    g.append(lin - kt * Apd)
+    jac.append(ca.jacobian(lin, w) - kt * ca.mtimes(A, jpd) - ca.mtimes(Apd, ca.jacobian(kt, w)))
     names.extend(["pitch_integration"] * (nF - 1))
-    Uf = ca.vertcat(lat_rows(tf), pf.T, ca.repmat(ca.vertcat(L_to, c_to, cd_to), 1, nF), ca.DM(tau_f).T)
+    Uf = ca.vertcat(lat_rows(tf), pf.T, ca.repmat(ca.vertcat(L_to, c_to, cd_to), 1, nF), kt * ca.DM(tau_f).T)
     add("flight_rows", Uf, [(["torque"] if s.torque_limits else []) + (["flight_clearance"] if 0 < k < nF - 1 else [])
                             for k in range(nF)])
-    phi_td = _spline_rows(spl, cl, np.array([phases.touchdown]), phases.touchdown)
+    phi_td = _time_scaled(_spline_rows(spl, cl, np.array([phases.touchdown]), phases.touchdown), 1, ik)
     Utd = ca.vertcat(lat_rows(np.array([phases.touchdown])), phi_td, xL, pf[-1], L_to, c_to, cd_to,
-                     float(tau_f[-1]), Limp)
+                     kt * float(tau_f[-1]), Limp)
     add("touchdown_rows", Utd, [["touchdown_position", "impact"]])
 
     # tube on a dense grid (the end points are fixed on the training path)
     n_tube = max(2, int(round(T / s.tube_spacing)) + 1)
     t_tube = np.linspace(0.0, T, n_tube)[1:-1]
-    add("tube_rows", (ca.sparsify(ca.DM(sp.basis(t_tube, 0))) @ Pm).T, [["tube"] for _ in t_tube])
+    add("tube_rows", (ca.sparsify(ca.DM(sp.basis(t_tube, 0))) @ Pm).T, [["tube"] for _ in t_tube], affine=True)
 
-    G_, J_ = ca.vertcat(*g), ca.vertcat(*jac)
+    names_a = np.array(names)
+    row_scale = np.ones(len(names))  # torque rows in units of each joint's limit range
+    sel = np.where(names_a == "torque")[0]
+    row_scale[sel] = np.tile(1.0 / rm.torque_scale, len(sel) // len(rm.active))
+    G_ = ca.vertcat(*g) * ca.DM(row_scale)
+    J_ = ca.mtimes(ca.diag(ca.DM(row_scale)), ca.vertcat(*jac))
     bounds = {"dynamics": (0, 0), "torque": None, "heel_complementarity": (-np.inf, s.complementarity_eps),
               "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
               "heel_up": (0, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
@@ -474,7 +513,6 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     lbg, ubg = np.zeros(len(names)), np.zeros(len(names))
     act = rm.active
     tmin, tmax = limits.tau_min[act] / rm.torque_scale, limits.tau_max[act] / rm.torque_scale
-    names_a = np.array(names)
     for k, bnd in bounds.items():
         sel = names_a == k
         if k == "torque":
@@ -499,6 +537,22 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         off += v.numel()
     for name in ("lam", "lam_impact"):
         lbx[slice(*sizes[name])] = 0.0
+    if s.time_scale:
+        lbx[slice(*sizes["time_scale"])], ubx[slice(*sizes["time_scale"])] = s.time_scale_bounds
+    if s.contact_model == "schedule":
+        # fixed contact sequence (:mod:`.phases`): an unloaded heel or ball has zero force; a
+        # loaded ball stays on the ground and a loaded heel keeps the foot flat
+        tc = np.concatenate([ts, tl])
+        lam_ub = ubx[slice(*sizes["lam"])].reshape(nC, 6)  # view; node-major like Lam's columns
+        heel, ball = phases.loaded("heel", tc), phases.loaded("ball", tc)
+        lam_ub[~heel, 0:2] = 0.0
+        lam_ub[~ball, 2:4] = 0.0
+        imp_ub = ubx[slice(*sizes["lam_impact"])]
+        imp_ub[0:2] = 0.0 if not phases.loaded("heel", np.array([phases.touchdown]))[0] else np.inf
+        imp_ub[2:4] = 0.0 if not phases.loaded("ball", np.array([phases.touchdown]))[0] else np.inf
+        ubg[names_a == "heel_up"] = np.where(heel, s.flat_foot_pitch, np.inf)
+        lbg[names_a == "ball_height"] = np.where(ball, -s.contact_tolerance, -s.ball_tolerance)
+        ubg[names_a == "ball_height"] = np.where(ball, s.contact_tolerance, np.inf)
     x0 = np.zeros(w.numel())
     x0[slice(*sizes["P"])] = Pfix[1:-1].ravel(order="F")
     x0[slice(*sizes["phi_s"])] = init["phi_s"]
@@ -509,6 +563,9 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     fl = flight_guess(rm, sp, sps, Pfix, np.asarray(init["phi_s"], float), phases.takeoff, tau_fine, nsub)
     for name in ("c_to", "cd_to", "L_to", "pitch_flight"):
         x0[slice(*sizes[name])] = fl[name]
+    if s.time_scale:
+        x0[slice(*sizes["time_scale"])] = 1.0
+    x0 = np.clip(x0, lbx, ubx)
 
     p0 = ca.MX.sym("p", 1)
     jac_g = ca.Function("jac_g", [w, p0], [G_, J_], ["x", "p"], ["g", "jac_g_x"])
@@ -519,9 +576,9 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
             "ipopt.constr_viol_tol": 1e-6, "ipopt.mu_strategy": "adaptive", "jac_g": jac_g,
             "calc_lam_p": False, "calc_lam_x": False}  # the compiled rows have no second derivatives
     solver = ca.nlpsol("broad_jump", "ipopt", nlp, opts)
-    unpack = ca.Function("unpack", [w], [Pm, cs, cl, xL, Lam, Limp, c_to, cd_to, L_to, pf],
+    unpack = ca.Function("unpack", [w], [Pm, cs, cl, xL, Lam, Limp, c_to, cd_to, L_to, pf, kt],
                          ["w"], ["P", "phi_s", "phi_l", "x_L", "lam", "lam_impact", "c_to", "cd_to", "L_to",
-                                 "pitch_flight"])
+                                 "pitch_flight", "time_scale"])
     build = time.perf_counter() - t0
     return JumpNLP(solver, x0, lbx, ubx, lbg, ubg, unpack, names, build,
                    {"grid": grid, "splines": (sp, sps, spl), "mass": mass,
