@@ -359,6 +359,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
                                                                      "rfoot", "rfoot_end", "rtoes_end"]),
             "contact_points": np.array(["heel", "ball", "toe"]), "heel_offset": js.geom.heel_offset,
             "takeoff": k * ph.takeoff, "touchdown": k * ph.touchdown, "settle": k * ph.settle, "time_scale": k,
+            "q_initial": js.training.Q, "t_initial": js.training.t, "P_initial": js.init["P"],
             "tau_min": js.limits.tau_min, "tau_max": js.limits.tau_max, "friction": s.mu,
             "model": js.model.saveToString()}
 

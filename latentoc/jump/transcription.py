@@ -86,6 +86,27 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   check of that end point: friction ratio 0.36, min normal force 77 N, centre-of-pressure
   margin -0.12 m, torque-limit excess 5.9 N m (977 before), point-cone violation 0.09 body
   weights, flight residual 3e-14.
+* this version: contact schedule instead of complementarity, free time scale, initial latent
+  path smoothed with its takeoff and touchdown state kept, torque limits from the scheduled
+  training fit with a 5 N m floor.  Phase 1 and phase 2 converge at every tube of the sweep
+  (tube 0.02 from the training fit: 346 + 406 iterations, 94 s).  Each change was measured
+  on its own: with complementarity rows Ipopt's dual infeasibility grew to 1e11; with fixed
+  phase durations phase 1 ended locally infeasible at a 2.3 cm takeoff-height mismatch;
+  without smoothing it ended locally infeasible (violation 0.014); with the plain 10 % margin
+  the head's 1.9 N m limit had the largest multiplier and the jump stopped at 0.24 m.
+  Sweep (``python -m latentoc sweep broad-jump``, warm-started): distance 0.27, 0.35, 0.38,
+  0.41, 0.41, 0.43 m for tubes 0.005-0.16, 9-60 s per solve.  That is below the training
+  jump's 0.73 m: phase 1's feasible point nearest the training fit jumps only 0.23-0.31 m.
+  Adding 9 stance nodes in the last 30 ms before takeoff (``push_off_nodes``), where the 1 kHz
+  check finds the needed centre of pressure 6-11 cm ahead of the toe, makes phase 1 fall into
+  restoration (no feasible point in 1500 iterations), so it is off by default.  A uniformly
+  denser stance grid (63 nodes, 5 ms) does not converge either (phase 1: 1500 iterations,
+  violation 1e-3; 650 s), while its 1 kHz check is closer (centre of pressure -0.03 to -0.08 m,
+  friction ratio 0.40).  The end point at tube 0.16 (32 stance nodes, ``solve --tube 0.16``):
+  distance 0.42 m, time scale 0.965, 1 kHz check: flight residual 4e-14 body weights, friction
+  ratio 0.56, centre of pressure 0.26 m outside the foot at 0.12 s where fz is 0.19 body
+  weights, point-cone violation 0.13 body weights, torque-limit excess 6.6 N m, ZMP margin
+  -0.05 m, COM margin +0.05 m.
 """
 from __future__ import annotations
 
