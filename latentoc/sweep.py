@@ -26,6 +26,14 @@ __all__ = ["sweep", "format_table", "write_sweep"]
 _FIELDS = ("method", "tube_spec", "tube", "tube_relative", "joint_range_deg", "latent_dim", "status", "success",
            "iterations", "cost_initial", "cost", "performance_gain_pct", "solve_time_s", "build_time_s",
            "max_tube_violation", "quadrature_error", "warm_start")
+# the 1 kHz verification of contact problems (latentoc.jump.verify), kept when a result has them
+_CHECKS = ("max_dynamics_residual", "max_flight_residual", "min_normal_force", "max_friction_ratio", "cop_margin",
+           "zmp_margin", "com_margin", "max_torque_violation", "max_point_cone_violation", "max_sigma2",
+           "time_scale")
+
+
+def _row(r: dict[str, Any]) -> dict[str, Any]:
+    return {**{k: r.get(k) for k in _FIELDS}, **{k: r[k] for k in _CHECKS if k in r}}
 
 
 def _print_now(line: str) -> None:
@@ -52,13 +60,13 @@ def sweep(problem: Problem, tubes: Sequence[float | str], baseline_ranges: Seque
         r = sol.result
         if warm and r["success"]:
             solved.append((r["tube"], sol.trajectory["P"]))
-        rows.append({k: r.get(k) for k in _FIELDS})
+        rows.append(_row(r))
         if progress:
             progress(f"[{i + 1}/{total}] tube {tube}: delta {r['tube']:.4g}, cost {r['cost']:.2f}, "
                      f"gain {r['performance_gain_pct']:.2f}%, {r['solve_time_s']:.2f} s, {r['status']}")
     for j, k in enumerate(baseline_ranges or []):
         r = solve(problem, method="joint-range", joint_range_deg=float(k), hessian=hessian).result
-        rows.append({f: r.get(f) for f in _FIELDS})
+        rows.append(_row(r))
         if progress:
             progress(f"[{len(tubes) + j + 1}/{total}] joint range +-{k} deg: cost {r['cost']:.2f}, "
                      f"gain {r['performance_gain_pct']:.2f}%, {r['solve_time_s']:.2f} s, {r['status']}")

@@ -21,6 +21,24 @@ def test_rows(rows):
     assert lat["method"] == "latent" and lat["tube_spec"] == "200x" and lat["success"]
     assert jr["method"] == "joint-range" and jr["joint_range_deg"] == 5.0 and jr["success"]
     assert lat["cost"] < lat["cost_initial"] and jr["cost"] < jr["cost_initial"]
+    assert "max_friction_ratio" not in lat  # 1 kHz contact checks only when the result has them
+
+
+def test_rows_keep_the_contact_checks(monkeypatch):
+    """A contact problem's 1 kHz verification (and time scale) travels into its sweep row."""
+    import latentoc.sweep as sw
+
+    class Sol:
+        result = {"method": "latent", "tube": 0.02, "tube_spec": 0.02, "cost": 0.4, "cost_initial": 0.7,
+                  "performance_gain_pct": -40.0, "solve_time_s": 1.0, "status": "Solve_Succeeded", "success": True,
+                  "max_friction_ratio": 0.38, "cop_margin": 0.01, "time_scale": 0.97}
+        trajectory: dict = {}
+
+    monkeypatch.setattr(sw, "solve", lambda *a, **k: Sol())
+    monkeypatch.setattr(sw, "problem_gpdm", lambda *a, **k: (None,))
+    (row,) = sw.sweep(load_problem("broad-jump"), [0.02], progress=None)
+    assert row["max_friction_ratio"] == 0.38 and row["cop_margin"] == 0.01 and row["time_scale"] == 0.97
+    assert row["cost"] == 0.4 and "zmp_margin" not in row
 
 
 def test_table_and_files(rows, tmp_path):
