@@ -69,6 +69,12 @@ class BSpline:
             raise SplineInputError(f"control points P has {P.shape[0]} rows, the spline has {self.n_control}")
         return self.basis(t, derivative) @ P
 
+    def smoothing_rows(self, smoothing: float, n_points: int = 400) -> np.ndarray:
+        """S (n_points x n_control) with ||S P||^2 = smoothing * int ||x''(t)||^2 dt, by the
+        rectangle rule on ``n_points`` evenly spaced times (the penalty of :meth:`fit`)."""
+        tq = np.linspace(0.0, self.duration, n_points)
+        return np.sqrt(smoothing * self.duration / n_points) * self.basis(tq, 2)
+
     def fit(self, t: np.ndarray, X: np.ndarray, fix_ends: bool = True, smoothing: float = 0.0) -> np.ndarray:
         """Least-squares control points of samples ``X`` (n x d) at times ``t``.
 
@@ -89,9 +95,9 @@ class BSpline:
         B = self.basis(t)
         target = X
         if smoothing > 0:
-            tq = np.linspace(0.0, self.duration, 400)
-            B = np.vstack([B, np.sqrt(smoothing * self.duration / tq.size) * self.basis(tq, 2)])
-            target = np.vstack([X, np.zeros((tq.size, X.shape[1]))])
+            S = self.smoothing_rows(smoothing)
+            B = np.vstack([B, S])
+            target = np.vstack([X, np.zeros((S.shape[0], X.shape[1]))])
         if not fix_ends:
             return np.linalg.lstsq(B, target, rcond=None)[0]
         P = np.zeros((self.n_control, X.shape[1]))

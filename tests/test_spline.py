@@ -64,3 +64,11 @@ def test_smoothing_trades_fit_for_curvature_and_tends_to_the_line():
     assert np.max(np.abs(sp.evaluate(P, tq) - line)) < 1e-4
     with pytest.raises(SplineInputError, match="smoothing"):
         sp.fit(t, X, smoothing=-1.0)
+
+
+def test_smoothing_rows_integrate_the_squared_second_derivative():
+    """||S P||^2 = smoothing * int ||x''||^2 dt, analytic for x = t^3 on [0, 2]: 36 * 8 / 3 = 96."""
+    sp = BSpline(8, 2.0)
+    t = np.linspace(0.0, 2.0, 50)
+    P = sp.fit(t, t[:, None] ** 3)
+    assert np.isclose(np.sum((sp.smoothing_rows(0.5) @ P) ** 2), 0.5 * 96.0, rtol=1e-2)

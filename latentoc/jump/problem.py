@@ -19,10 +19,10 @@ import pinocchio as pin
 from ..dynamics import SymbolicModel
 from ..gpdm import GPDM, GPDMSettings, learn_gpdm
 from ..spline import BSpline
-from .contact import FootGeometry
+from .contact import FootGeometry, foot_points
 from .phases import Phases, training_phases
 from .torque_limits import TrainingDynamics, estimate_training_dynamics
-from .training import FOOT, TOE, JumpTraining, jump_model, training_jumps
+from .training import JumpTraining, jump_model, training_jumps
 from .transcription import JumpSettings, build_nlp
 
 
@@ -46,11 +46,9 @@ def _foot_pitch(model, Q, geom) -> tuple[np.ndarray, np.ndarray]:
     phi, bx = np.zeros(len(Q)), np.zeros(len(Q))
     for i, q in enumerate(Q):
         pin.framesForwardKinematics(model, d, q)
-        M = d.oMf[model.getFrameId(FOOT)]
-        heel = M.translation + M.rotation @ geom.heel_offset
-        ball = d.oMf[model.getFrameId(TOE)].translation
-        phi[i] = np.arctan2(heel[2] - ball[2], ball[0] - heel[0])
-        bx[i] = ball[0]
+        heel, _, tip = foot_points(model, d, geom).T
+        phi[i] = np.arctan2(heel[2] - tip[2], tip[0] - heel[0])
+        bx[i] = tip[0]
     return phi, bx
 
 
@@ -102,9 +100,9 @@ def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: fl
     plain = sp.fit(t, X)
     if smoothing <= 0:
         return plain
-    tq = np.linspace(0.0, sp.duration, 400)
-    A = np.vstack([sp.basis(t), np.sqrt(smoothing * sp.duration / tq.size) * sp.basis(tq, 2)])
-    b = np.vstack([X, np.zeros((tq.size, X.shape[1]))])
+    S = sp.smoothing_rows(smoothing)
+    A = np.vstack([sp.basis(t), S])
+    b = np.vstack([X, np.zeros((S.shape[0], X.shape[1]))])
     C = np.vstack([sp.basis(keep, 0), sp.basis(keep, 1)])
     d = C @ plain
     P = plain.copy()  # the end control points stay (the end poses)

@@ -28,9 +28,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import FootGeometry, point_jacobians
+from .contact import FootGeometry, foot_points, point_jacobians
 from .support_polygon import margin, support_polygon
-from .training import FOOT, TOE
 from .zmp import G, zmp
 
 
@@ -54,7 +53,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
     d = model.createData()
     mass = sum(i.mass for i in model.inertias)
     W = mass * G
-    ids = {n: model.getFrameId(n) for n in (FOOT, TOE, "ltoes_end", "rtoes_end")}
+    ids = {n: model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")}
     res_max, lat_max, tau_viol, sym_tau, flight_res = 0.0, 0.0, 0.0, 0.0, 0.0
     fz_min, ratio_max, cop_margin = np.inf, 0.0, np.inf
     zmp_margin, com_margin = np.inf, np.inf
@@ -64,14 +63,17 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
     for i in range(len(t)):
         q, v, a = Q[i], V[i], A[i]
         tau = pin.rnea(model, d, q, v, a)
-        pin.computeJointJacobians(model, d, q)
-        pin.framesForwardKinematics(model, d, q)
+        with_points = contact[i] and points is not None
+        if with_points:  # places the frames and joint Jacobians too
+            Jp = point_jacobians(model, d, q, geom)
+        else:
+            pin.computeJointJacobians(model, d, q)
+            pin.framesForwardKinematics(model, d, q)
         JL = pin.getFrameJacobian(model, d, ids["ltoes_end"], pin.LOCAL_WORLD_ALIGNED)
         JR = pin.getFrameJacobian(model, d, ids["rtoes_end"], pin.LOCAL_WORLD_ALIGNED)
         if not contact[i]:
             gen = np.zeros(model.nv)
-        elif points is not None:  # each point force on its own body (heel, ball: foot; toe: toes)
-            Jp = point_jacobians(model, d, q, geom)
+        elif with_points:  # each point force on its own body (heel, ball: foot; toe: toes)
             gen = sum(Jp[k].T @ np.array([points[i, k, 0], 0.0, points[i, k, 1]]) for k in range(3))
             cone = max(cone, float(np.max(np.abs(points[i, :, 0]) - mu * points[i, :, 1])) / W)
         else:
@@ -90,9 +92,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
         fx, _, fz, _, my, _ = sagittal_contact_wrench(JL + JR, tau)
         fz_min = min(fz_min, fz)
         ratio_max = max(ratio_max, abs(fx) / max(fz, 1e-9))
-        toe = d.oMf[ids[TOE]].translation
-        M = d.oMf[ids[FOOT]]
-        heel = M.translation + M.rotation @ heel_off
+        heel, _, toe = foot_points(model, d, geom).T
         cop = toe[0] - my / max(fz, 1e-9)
         cop_margin = min(cop_margin, min(cop - heel[0], toe[0] - cop))
         if t[i] >= t_td - 1e-9:
