@@ -90,3 +90,24 @@ def test_time_scaled_export_is_differentiable_in_real_time():
         vd = pin.difference(js.model, Q[i - 1], Q[i + 1]) / (2 * h)
         assert np.allclose(vd, V[i], atol=2e-3 * max(1.0, np.abs(V[i]).max()))
         assert np.allclose((V[i + 1] - V[i - 1]) / (2 * h), A[i], atol=2e-2 * max(1.0, np.abs(A[i]).max()))
+
+
+def test_initial_latent_path_keeps_the_kept_state_and_smooths_the_rest():
+    """Equality-constrained smoothing: at the kept times the value and velocity equal the plain
+    fit's (to solver precision), the end control points stay, and the curvature integral drops."""
+    from latentoc.jump.problem import initial_latent_path
+    from latentoc.spline import BSpline
+
+    sp = BSpline(15, 1.3)
+    t = np.linspace(0.0, 1.3, 157)
+    rng = np.random.default_rng(1)
+    X = np.column_stack([np.sin(5 * t), np.cos(3 * t), t]) + 0.05 * rng.standard_normal((157, 3))
+    keep = np.array([0.31, 0.69])
+    plain, P = sp.fit(t, X), initial_latent_path(sp, t, X, 1e-3, keep)
+    for j in (0, 1):
+        assert np.allclose(sp.evaluate(P, keep, j), sp.evaluate(plain, keep, j), atol=1e-9)
+    assert np.array_equal(P[[0, -1]], plain[[0, -1]])
+    S = sp.smoothing_rows(1.0)
+    curv = [np.sum((S @ Q) ** 2) for Q in (plain, P, initial_latent_path(sp, t, X, 1e-1, keep))]
+    assert curv[0] > curv[1] > curv[2]
+    assert np.array_equal(initial_latent_path(sp, t, X, 0.0, keep), plain)
