@@ -128,6 +128,7 @@ from .lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
 from .phases import Phases
 from .support_polygon import symbolic_rows
 from .torque_limits import TrainingDynamics
+from .training import TOE
 from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]
@@ -153,6 +154,7 @@ class JumpSettings:
     contact_tolerance: float = 0.01  # m: a loaded ball stays within this of the ground ("schedule")
     flat_foot_pitch: float = 0.05  # rad: a loaded heel keeps the foot this flat ("schedule", ~1 cm at the heel)
     tube_spacing: float = 0.005  # s; the tube (cheap: GP variance only) on this grid, not only at nodes
+    wrench_spacing: float = 0.0  # s; > 0: the needed wrench in its cone on this grid between contact nodes
     max_iter: int = 400
     tol: float = 1e-5
     hessian: str = "limited-memory"  # the only one: the lifted rows give first derivatives only
@@ -280,6 +282,49 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     return _node_rows("jump_contact_node", u, parts)
 
 
+RIGHT_TOE = "rtoes_end"  # the mirror of TOE
+TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch when only the toe tip is loaded
+
+
+def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
+    """Rows of the contact wrench the motion needs at a sample between contact nodes,
+    u = (x, xd, xdd, phi, phid, phidd, x_pin).
+
+    No force variables: the three sagittal base rows of RNEA, solved for the (fx, fz, my) of
+    each (symmetric) foot at its toe tip (as :func:`.verify.sagittal_contact_wrench`), must lie
+    in the wrench cone of the foot's loaded points.  In the sagittal plane a wrench is made of
+    point forces in their friction cones exactly when fz >= 0, |fx| <= mu fz and the centre of
+    pressure ``toe_x - my / fz`` lies between the rearmost loaded point and the toe tip, so the
+    rows are (body weights, all >= 0, homogeneous in fz so that they stay smooth as fz -> 0):
+    ``wrench_normal`` fz; ``wrench_friction`` mu fz -+ fx; ``cop_front`` my (not ahead of the
+    toe tip); ``cop_heel``, ``cop_ball``, ``cop_pad``: (toe_x - back_x) fz - my with the heel,
+    the ball or a :data:`TOE_PAD` patch as the rearmost loaded point (chosen per sample by the
+    contact schedule in :func:`build_nlp`).  The nodes alone left the needed wrench free to leave
+    the cone and the foot between them (measured, issue 6).
+    """
+    d, W = rm.gpdm.latent_dim, rm.weight
+    u = ca.SX.sym("u", 3 * d + 4)
+    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
+    phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
+    b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
+    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
+    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
+    tau = rm.sym.rnea(q, v, a)
+    J = rm.sym.frame_jacobian(TOE)(q) + rm.sym.frame_jacobian(RIGHT_TOE)(q)
+    fx, fz, my = ca.vertsplit(ca.solve(J.T[SAGITTAL_ROWS, SAGITTAL_ROWS], tau[SAGITTAL_ROWS]) / W)
+    P = points_function(rm.sym, rm.geom)(q)
+    toe_x = P[0, 2]
+    parts = {
+        "wrench_normal": fz,
+        "wrench_friction": ca.vertcat(rm.mu * fz - fx, rm.mu * fz + fx),
+        "cop_front": my,
+        "cop_heel": (toe_x - P[0, 0]) * fz - my,
+        "cop_ball": (toe_x - P[0, 1]) * fz - my,
+        "cop_pad": TOE_PAD * fz - my,
+    }
+    return _node_rows("jump_wrench_sample", u, parts)
+
+
 def _homogeneous_rows(heel, toe, p_scaled, s):
     """s * rows(p_scaled / s) of the support polygon (:func:`symbolic_rows`), without the division."""
     V = [(heel[0], -heel[1]), (toe[0], -toe[1]), (toe[0], toe[1]), (heel[0], heel[1])]
@@ -381,7 +426,7 @@ def node_rows(rm: RowModel, jit: bool = True) -> dict[str, tuple[NodeRows, dict[
     """All row blocks of the jump, compiled (cached per model, GPDM, geometry, limits and mu)."""
     key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, jit)
     if key not in _ROW_CACHE:
-        raw = {f.__name__: f(rm) for f in (contact_rows, flight_rows, takeoff_rows, touchdown_rows,
+        raw = {f.__name__: f(rm) for f in (contact_rows, wrench_rows, flight_rows, takeoff_rows, touchdown_rows,
                                             pitch_rate_rows, tube_rows)}
         compiled = compile_node_rows({k: v[0] for k, v in raw.items()}, jit=jit)
         _ROW_CACHE[key] = (rm, {k: (compiled[k], raw[k][1]) for k in raw})  # keep rm alive for the ids
@@ -404,6 +449,13 @@ def _time_scaled(R: ca.MX, n: int, ik) -> ca.MX:
     if ik is None:
         return R
     return ca.vertcat(R[:n, :], ik * R[n:2 * n, :], ik ** 2 * R[2 * n:, :])
+
+
+def _between(nodes: np.ndarray, spacing: float) -> np.ndarray:
+    """Sample times about ``spacing`` apart strictly between consecutive node times."""
+    out = [np.linspace(a, b, max(1, int(np.ceil((b - a) / spacing - 1e-9))) + 1)[1:-1]
+           for a, b in zip(nodes[:-1], nodes[1:])]
+    return np.concatenate(out) if out else np.zeros(0)
 
 
 def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]]) -> tuple[list[int], list[str]]:
@@ -490,6 +542,16 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         extra = (["zmp_polygon"] + (["com_polygon"] if tk >= phases.settle - 1e-9 else [])) if s.polygon else []
         per_node.append(base_rows + extra)
     add("contact_rows", Uc, per_node)
+    if s.wrench_spacing > 0:  # the needed wrench in the loaded points' cone between the nodes
+        tws, twl = (_between(tn, s.wrench_spacing) for tn in (ts, tl))
+        Uw = ca.vertcat(ca.horzcat(lat_rows(tws), lat_rows(twl)),
+                        ca.horzcat(_time_scaled(_spline_rows(sps, cs, tws), 1, ik),
+                                   _time_scaled(_spline_rows(spl, cl, twl, phases.touchdown), 1, ik)),
+                        ca.horzcat(ca.DM.zeros(1, len(tws)), ca.repmat(xL, 1, len(twl))))
+        tw = np.concatenate([tws, twl])
+        heel_w, ball_w = phases.loaded("heel", tw), phases.loaded("ball", tw)
+        back = np.where(heel_w, "cop_heel", np.where(ball_w, "cop_ball", "cop_pad"))
+        add("wrench_rows", Uw, [["wrench_normal", "wrench_friction", "cop_front", str(b)] for b in back])
 
     # flight: takeoff state variables, pitch by the trapezoid rule on a fine grid, nodes
     tau_f = tf - phases.takeoff
@@ -530,7 +592,9 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
               "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
               "heel_up": (0, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
               "takeoff": (0, 0), "pitch_integration": (0, 0), "flight_clearance": (0, np.inf),
-              "touchdown_position": (0, 0), "impact": (0, 0), "tube": (-np.inf, s.tube)}
+              "touchdown_position": (0, 0), "impact": (0, 0), "tube": (-np.inf, s.tube),
+              **{k: (0, np.inf) for k in ("wrench_normal", "wrench_friction", "cop_front", "cop_heel", "cop_ball",
+                                          "cop_pad")}}
     lbg, ubg = np.zeros(len(names)), np.zeros(len(names))
     act = rm.active
     tmin, tmax = limits.tau_min[act] / rm.torque_scale, limits.tau_max[act] / rm.torque_scale
