@@ -108,3 +108,18 @@ def test_point_forces_on_their_bodies_balance_a_static_stance():
     assert r["max_torque_violation"] == 0.0
     arrays["point_forces"] = arrays["point_forces"] * 0.5
     assert 0.4 < verify(model, arrays)["max_dynamics_residual"] < 0.6
+
+
+def test_loaded_support_margin_follows_the_schedule():
+    """Standing still, the centre of pressure lies between heel and toe: with the heel loaded the
+    scheduled margin is the plain one; with only the toe tip loaded the same stance needs the
+    centre of pressure (toe_x - my / fz) inside a 1 cm pad, so the margin is pad - (toe_x - cop)."""
+    model, arrays = _static_arrays()
+    n = len(arrays["t"])
+    arrays["loaded"] = np.ones((n, 3), dtype=int)
+    r = verify(model, arrays)
+    assert np.isclose(r["cop_margin_loaded"], r["cop_margin"]) and r["cop_margin"] > 0
+    fx, fz, my = arrays["wrench"][0, [0, 2, 4]]
+    arrays["loaded"][:, :2] = 0
+    r = verify(model, arrays, toe_pad=0.01)
+    assert np.isclose(r["cop_margin_loaded"], 0.01 - my / fz) and r["cop_margin_loaded"] < 0

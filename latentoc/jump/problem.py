@@ -352,6 +352,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
         node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_feet[i], s.mu)).ravel()
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
             "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
+            "loaded": np.column_stack([ph.loaded(p, sn) & (st | la) for p in ("heel", "ball", "toe")]).astype(np.int8),
             "sigma2": S2.ravel(), "latent": X, "control_points": P, "node_t": node_t, "node_wrench": node_w,
             "node_lambda": lam_nodes.T, "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end",
                                                                      "rfoot", "rfoot_end", "rtoes_end"]),

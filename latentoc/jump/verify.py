@@ -14,7 +14,9 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   its force generators) against the needed wrench at the nearest sample, body weights;
 * the wrench the motion *needs*: the 3 sagittal base rows solved for (fx, fz, my) of
   each (symmetric) foot; from it the minimum normal force, the maximum friction ratio
-  |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe);
+  |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe); with ``loaded`` (n, 3: heel, ball, toe may carry
+  force, the contact schedule) also ``cop_margin_loaded``, against the rearmost loaded point
+  (the heel, else the ball, else a ``toe_pad`` behind the toe tip);
 * ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
   projected COM against the support polygon (:mod:`.support_polygon`) during landing
   (COM once settled);
@@ -43,7 +45,7 @@ def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return w
 
 
-def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
+def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = 0.01) -> dict:
     """Verification numbers (see module docstring)."""
     t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
     Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)
@@ -60,6 +62,8 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
     act = tmax - tmin > 1e-6
     points = np.asarray(arrays["point_forces"]) if "point_forces" in arrays else None
     geom, cone = FootGeometry(heel_off), 0.0
+    loaded = np.asarray(arrays["loaded"]).astype(bool) if "loaded" in arrays else None
+    cop_loaded = np.inf
     for i in range(len(t)):
         q, v, a = Q[i], V[i], A[i]
         tau = pin.rnea(model, d, q, v, a)
@@ -92,9 +96,12 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
         fx, _, fz, _, my, _ = sagittal_contact_wrench(JL + JR, tau)
         fz_min = min(fz_min, fz)
         ratio_max = max(ratio_max, abs(fx) / max(fz, 1e-9))
-        heel, _, toe = foot_points(model, d, geom).T
+        heel, ball, toe = foot_points(model, d, geom).T
         cop = toe[0] - my / max(fz, 1e-9)
         cop_margin = min(cop_margin, min(cop - heel[0], toe[0] - cop))
+        if loaded is not None:  # the rearmost loaded point: heel, ball or the toe pad
+            back = heel[0] if loaded[i, 0] else (ball[0] if loaded[i, 1] else toe[0] - toe_pad)
+            cop_loaded = min(cop_loaded, min(cop - back, toe[0] - cop))
         if t[i] >= t_td - 1e-9:
             pts = np.array([heel, toe, heel * [1, -1, 1], toe * [1, -1, 1]])
             As, bs = support_polygon(pts)
@@ -114,6 +121,8 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict:
            "min_normal_force": float(fz_min), "max_friction_ratio": ratio_max, "cop_margin": float(cop_margin),
            "zmp_margin": float(zmp_margin), "com_margin": float(com_margin),
            "max_torque_violation": tau_viol, "max_point_cone_violation": cone, "max_symmetric_torque": sym_tau}
+    if loaded is not None:
+        out["cop_margin_loaded"] = float(cop_loaded)
     if "sigma2" in arrays:
         out["max_sigma2"] = float(np.max(arrays["sigma2"]))
     return out
