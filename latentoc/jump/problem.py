@@ -241,15 +241,19 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
     viol = np.maximum(nlp.lbg - g, 0) + np.maximum(g - nlp.ubg, 0)
     parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(w))}
     distance = float(parts["x_L"].ravel()[0])
-    worst = {}
-    for name, v in zip(nlp.names, viol):
+    worst, binding = {}, {}
+    for name, v, lam in zip(nlp.names, viol, np.abs(np.array(sol["lam_g"]).ravel())):
         worst[name] = max(worst.get(name, 0.0), float(v))
+        binding[name] = binding.get(name, 0.0) + float(lam)
     result = {
         "problem": "broad-jump", "tube": s.tube, "status": stats["return_status"], "success": bool(stats["success"]),
         "iterations": int(stats["iter_count"]), "build_time_s": nlp.build_time, "solve_time_s": solve_time,
         "objective": float(sol["f"]), "distance_initial": js.distance_training, "distance": distance,
         "performance_gain_pct": 100.0 * (distance - js.distance_training) / js.distance_training,
         "max_constraint_violation": float(viol.max()), "constraint_violation_by_kind": worst,
+        # sum of |multiplier| per row kind: the distance gained per unit of relaxation (m per
+        # row unit; torque rows are in units of each joint's limit range), i.e. what binds
+        "multiplier_by_kind": binding,
         "time_scale": float(parts["time_scale"].ravel()[0]),
         "duration": float(parts["time_scale"].ravel()[0]) * js.phases.duration,
         "settings": asdict(s), "warm_start": bool(warm),

@@ -23,6 +23,9 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
 * joint torques ``rnea[6:] - (J^T w)[6:]`` against tau_min, tau_max (joints with a
   non-zero range; the others must vanish by symmetry);
 * the tube: max sigma^2;
+* ``eq33_feet_distance``: the paper's objective (Eq. 33), the integral over the motion of the
+  ground-projected speed of both toe tips, ``|J_xy v|`` from the frame Jacobians: twice the jump
+  distance for a symmetric jump whose feet move only forwards (the paper's initial 1.45 m);
 * with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights).
 """
 from __future__ import annotations
@@ -64,6 +67,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = 0.0
     geom, cone = FootGeometry(heel_off), 0.0
     loaded = np.asarray(arrays["loaded"]).astype(bool) if "loaded" in arrays else None
     cop_loaded = np.inf
+    feet_speed = np.zeros(len(t))
     for i in range(len(t)):
         q, v, a = Q[i], V[i], A[i]
         tau = pin.rnea(model, d, q, v, a)
@@ -75,6 +79,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = 0.0
             pin.framesForwardKinematics(model, d, q)
         JL = pin.getFrameJacobian(model, d, ids["ltoes_end"], pin.LOCAL_WORLD_ALIGNED)
         JR = pin.getFrameJacobian(model, d, ids["rtoes_end"], pin.LOCAL_WORLD_ALIGNED)
+        feet_speed[i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         if not contact[i]:
             gen = np.zeros(model.nv)
         elif with_points:  # each point force on its own body (heel, ball: foot; toe: toes)
@@ -121,6 +126,8 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = 0.0
            "min_normal_force": float(fz_min), "max_friction_ratio": ratio_max, "cop_margin": float(cop_margin),
            "zmp_margin": float(zmp_margin), "com_margin": float(com_margin),
            "max_torque_violation": tau_viol, "max_point_cone_violation": cone, "max_symmetric_torque": sym_tau}
+    # Eq. 33: the integral of the feet's ground-projected speed, both toe tips (trapezoid rule)
+    out["eq33_feet_distance"] = float(np.sum(0.5 * (feet_speed[1:] + feet_speed[:-1]) * np.diff(t)))
     if loaded is not None:
         out["cop_margin_loaded"] = float(cop_loaded)
     if "sigma2" in arrays:
