@@ -107,6 +107,22 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   ratio 0.56, centre of pressure 0.26 m outside the foot at 0.12 s where fz is 0.19 body
   weights, point-cone violation 0.13 body weights, torque-limit excess 6.6 N m, ZMP margin
   -0.05 m, COM margin +0.05 m.
+* wrench samples between the nodes (``wrench_spacing``, :func:`wrench_rows`: the needed wrench
+  in the cone of the loaded points, no force variables), tube 0.16, warm-started from the cold
+  optimum (distance 0.346 m; its 1 kHz check: friction ratio 0.400, centre-of-pressure margin
+  -0.062 m, ZMP margin -0.020 m, torque-limit excess 25 N m, point-cone violation 0.11 body
+  weights): one sample per node interval (``0.005``): 1500 iterations without convergence
+  (525 s, the node base rows left at 1e-3), distance 0.267 m, 1 kHz check -0.022 m, -0.009 m,
+  9.9 N m, 0.08; three per interval (``0.0025``): the same stall (530 s), 0.245 m, -0.014 m,
+  -0.005 m, 9.8 N m, 0.06.  The samples pull the 1 kHz numbers towards valid but the NLP does not
+  converge, so they are off by default.  The cause is upstream of the transcription: along the
+  training fit, the toe-pinned base (leg joints from the GP mean, whose noise variance is only
+  6e-5: it interpolates the 120 Hz capture, jitter included) needs fz from -1.3 to 2.1 and fx
+  from -2.6 to 3.7 body weights in the stance, and 0.22 (fz) and 0.55 (fx) body weights of it
+  between 10 ms nodes; a noise floor (``beta3_max`` 1000) halves the between-node part
+  (0.09, 0.25) but not the range.  Measured with ``multiplier_by_kind`` at tube 0.16: the tube
+  does not bind (max sigma^2 0.069); without torque limits the same start reaches 0.60 m, with
+  a looser contact schedule (flat foot 0.3 rad, ball 5 cm) 0.45 m.
 """
 from __future__ import annotations
 
