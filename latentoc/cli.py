@@ -100,6 +100,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
               f"max violation on 1 kHz grid {r['max_tube_violation']:.3g}")
     if r.get("joint_range_deg") is not None:
         print(f"  joint range +-{r['joint_range_deg']:g} deg")
+    if r.get("max_dynamics_residual") is not None:  # contact problems: the exported motion's 1 kHz checks
+        print(f"  1 kHz checks: base residual {r['max_dynamics_residual']:.2g} body weights, min normal force "
+              f"{r['min_normal_force']:.1f} N, friction ratio {r['max_friction_ratio']:.3f} (mu {r['friction']:g}), "
+              f"centre-of-pressure margin {r.get('cop_margin_loaded', r['cop_margin']):.3f} m, "
+              f"ZMP margin {r['zmp_margin']:.3f} m, COM margin {r['com_margin']:.3f} m, "
+              f"torque-limit excess {r['max_torque_violation']:.2g} N m")
+        if r.get("eq33_feet_distance") is not None:
+            print(f"  Eq. 33 feet distance (both toe tips) {r['eq33_feet_distance']:.3f} m")
     print(f"  times: gpdm {r['gpdm_time_s']:.2f} s, build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s;"
           f" quadrature error {r['quadrature_error']:.2e}")
     if not sol.success and not args.keep_failed:

@@ -80,3 +80,28 @@ def test_solve_plots_writes_png_figures_of_the_solution(tmp_path, capsys):
     with Image.open(out / "plots" / "motion.gif") as gif:
         assert gif.n_frames > 10
     assert "plots: " in capsys.readouterr().out
+
+
+def test_solve_summary_reports_the_contact_checks(monkeypatch, capsys):
+    """For a contact problem the summary prints the exported motion's 1 kHz checks, as the
+    result (here verify's numbers for a static stance, numeric Pinocchio) holds them."""
+    import latentoc.solve
+    from latentoc.solve import Solution
+    from test_jump_verify import _static_arrays
+
+    from latentoc.jump.verify import verify
+
+    model, arrays = _static_arrays()
+    arrays["loaded"] = np.ones((len(arrays["t"]), 3), dtype=int)
+    checks = verify(model, arrays)
+    result = {"problem": "broad-jump", "method": "latent", "status": "Maximum_Iterations_Exceeded", "iterations": 3,
+              "success": False, "cost_initial": 0.73, "cost": 0.5, "performance_gain_pct": -31.5, "tube": 0.02,
+              "tube_spec": 0.02, "tube_relative": 300.0, "max_tube_violation": 0.0, "gpdm_time_s": 1.0,
+              "build_time_s": 2.0, "solve_time_s": 3.0, "quadrature_error": 0.0, "friction": 0.4, **checks}
+    monkeypatch.setattr(latentoc.solve, "solve", lambda problem, **kw: Solution(result=result))
+    assert main(["solve", "broad-jump", "--quiet"]) == 1  # not converged: nothing written
+    text = capsys.readouterr().out
+    assert f"min normal force {checks['min_normal_force']:.1f} N" in text
+    assert f"friction ratio {checks['max_friction_ratio']:.3f} (mu 0.4)" in text
+    assert f"centre-of-pressure margin {checks['cop_margin_loaded']:.3f} m" in text
+    assert f"Eq. 33 feet distance (both toe tips) {checks['eq33_feet_distance']:.3f} m" in text
