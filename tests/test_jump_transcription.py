@@ -1,10 +1,11 @@
 """Row blocks of the broad-jump NLP against numeric Pinocchio on the exported motion."""
 import numpy as np
 import pinocchio as pin
+import pytest
 
-from latentoc.jump.contact import foot_points
+from latentoc.jump.contact import TOE_PAD, foot_points
 from latentoc.jump.problem import consistent_start, initial_guess, setup, trajectory
-from latentoc.jump.transcription import TOE_PAD, JumpSettings, RowModel, build_nlp, node_rows
+from latentoc.jump.transcription import JumpSettings, RowModel, build_nlp, node_rows
 from latentoc.jump.verify import sagittal_contact_wrench
 from latentoc.jump.zmp import G
 
@@ -21,7 +22,7 @@ def test_wrench_rows_are_the_cone_of_the_needed_wrench():
     tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
     mass = sum(i.mass for i in js.model.inertias)
     rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass)
-    block, layout = node_rows(rm, jit=False)["wrench_rows"]
+    block, layout = node_rows(rm, jit=False, optional=("wrench_rows",))["wrench_rows"]
     sp, sps, spl = nlp.meta["splines"]
     ph, d = js.phases, js.model.createData()
     ids = [js.model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")]
@@ -70,3 +71,6 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support():
     n_back = sum(int((names == k).sum()) for k in ("cop_heel", "cop_ball", "cop_pad"))
     assert n_back == n_samples and (names == "cop_pad").sum() > 0 and (names == "cop_heel").sum() > 0
     assert len(n1.names) == len(n0.names) + 5 * n_samples
+    mass = sum(i.mass for i in js.model.inertias)
+    with pytest.raises(ValueError, match="unknown optional row blocks"):
+        node_rows(RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, 0.4, mass), jit=False, optional=("wrench",))

@@ -40,6 +40,7 @@ from .training import BALL, FOOT, TOE
 
 POINTS = ("heel", "ball", "toe")
 MU = 0.4
+TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch when only the toe tip is loaded
 
 
 def joint_embedding(smap: SymmetryMap) -> np.ndarray:

@@ -141,7 +141,7 @@ from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
 from ..spline import BSpline
 from .base import base_function
-from .contact import MU, FootGeometry, anchor_function, joint_embedding, point_generalized_force, point_forces, \
+from .contact import MU, TOE_PAD, FootGeometry, anchor_function, joint_embedding, point_generalized_force, point_forces, \
     points_function, toe_wrench
 from .flight import GRAVITY, ballistic_base, cumulative_trapezoid_matrix, flight_functions
 from .lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
@@ -303,7 +303,6 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
 
 
 RIGHT_TOE = "rtoes_end"  # the mirror of TOE
-TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch when only the toe tip is loaded
 
 
 def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
@@ -440,17 +439,27 @@ def tube_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
 
 
 _ROW_CACHE: dict = {}
+ROW_BLOCKS = (contact_rows, flight_rows, takeoff_rows, touchdown_rows, pitch_rate_rows, tube_rows)
+OPTIONAL_BLOCKS = (wrench_rows,)  # built (and compiled) only when asked for
 
 
-def node_rows(rm: RowModel, jit: bool = True) -> dict[str, tuple[NodeRows, dict[str, slice]]]:
-    """All row blocks of the jump, compiled (cached per model, GPDM, geometry, limits and mu)."""
+def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = ()
+              ) -> dict[str, tuple[NodeRows, dict[str, slice]]]:
+    """The row blocks of the jump and the ``optional`` ones named (e.g. ``"wrench_rows"``),
+    compiled; each block cached per model, GPDM, geometry, limits and mu."""
     key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, jit)
-    if key not in _ROW_CACHE:
-        raw = {f.__name__: f(rm) for f in (contact_rows, wrench_rows, flight_rows, takeoff_rows, touchdown_rows,
-                                            pitch_rate_rows, tube_rows)}
+    known = {f.__name__: f for f in OPTIONAL_BLOCKS}
+    unknown = [n for n in optional if n not in known]
+    if unknown:
+        raise ValueError(f"unknown optional row blocks {unknown}; known: {sorted(known)}")
+    wanted = list(ROW_BLOCKS) + [known[n] for n in optional]
+    cached = _ROW_CACHE.setdefault(key, (rm, {}))[1]  # keep rm alive for the ids
+    missing = [f for f in wanted if f.__name__ not in cached]
+    if missing:
+        raw = {f.__name__: f(rm) for f in missing}
         compiled = compile_node_rows({k: v[0] for k, v in raw.items()}, jit=jit)
-        _ROW_CACHE[key] = (rm, {k: (compiled[k], raw[k][1]) for k in raw})  # keep rm alive for the ids
-    return _ROW_CACHE[key][1]
+        cached.update({k: (compiled[k], raw[k][1]) for k in raw})
+    return {f.__name__: cached[f.__name__] for f in wanted}
 
 
 def _basis(sp: BSpline, t: np.ndarray, offset: float = 0.0) -> list[np.ndarray]:
@@ -500,7 +509,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     sym = sym or SymbolicModel(model)
     mass = float(sum(i.mass for i in model.inertias))
     rm = RowModel(sym, smap, gpdm, geom, limits, s.mu, mass)
-    blocks = node_rows(rm, jit=s.jit)
+    blocks = node_rows(rm, jit=s.jit, optional=("wrench_rows",) if s.wrench_spacing > 0 else ())
     dlat = gpdm.latent_dim
     grid = phases.grid(s.n_stance, s.n_flight, s.n_land, s.push_off_nodes)
     T = phases.duration

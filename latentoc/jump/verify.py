@@ -14,9 +14,10 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   its force generators) against the needed wrench at the nearest sample, body weights;
 * the wrench the motion *needs*: the 3 sagittal base rows solved for (fx, fz, my) of
   each (symmetric) foot; from it the minimum normal force, the maximum friction ratio
-  |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe); with ``loaded`` (n, 3: heel, ball, toe may carry
-  force, the contact schedule) also ``cop_margin_loaded``, against the rearmost loaded point
-  (the heel, else the ball, else a ``toe_pad`` behind the toe tip);
+  |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe); with ``loaded``
+  (n, 3: whether the heel, ball and toe may carry force, the contact schedule) also
+  ``cop_margin_loaded``, against the rearmost loaded point (the heel, else the ball, else a
+  ``toe_pad`` behind the toe tip);
 * ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
   projected COM against the support polygon (:mod:`.support_polygon`) during landing
   (COM once settled);
@@ -24,8 +25,8 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   non-zero range; the others must vanish by symmetry);
 * the tube: max sigma^2;
 * ``eq33_feet_distance``: the paper's objective (Eq. 33), the integral over the motion of the
-  ground-projected speed of both toe tips, ``|J_xy v|`` from the frame Jacobians: twice the jump
-  distance for a symmetric jump whose feet move only forwards (the paper's initial 1.45 m);
+  ground-projected speed of both toe tips, ``|J_xy v|`` from the frame Jacobians (twice the jump
+  distance only if the feet never move backwards or sideways);
 * with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights).
 """
 from __future__ import annotations
@@ -33,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import FootGeometry, foot_points, point_jacobians
+from .contact import TOE_PAD, FootGeometry, foot_points, point_jacobians
 from .support_polygon import margin, support_polygon
 from .zmp import G, zmp
 
@@ -48,7 +49,7 @@ def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return w
 
 
-def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = 0.01) -> dict:
+def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE_PAD) -> dict:
     """Verification numbers (see module docstring)."""
     t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
     Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)
