@@ -28,6 +28,7 @@ from .base import base_to_freeflyer, freeflyer_to_base
 
 BALL = "lfoot_end"
 TOE = "ltoes_end"
+RIGHT_TOE = "rtoes_end"  # the mirror image of TOE
 FOOT = "lfoot"
 
 

@@ -148,7 +148,7 @@ from .lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
 from .phases import Phases
 from .support_polygon import symbolic_rows
 from .torque_limits import TrainingDynamics
-from .training import TOE
+from .training import RIGHT_TOE, TOE
 from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]
@@ -263,6 +263,18 @@ class RowModel:
         return tau_joint[self.active.tolist()]
 
 
+def _anchored_dynamics(rm: RowModel, u: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """q and rnea(q, v, a) of the toe-pinned motion whose inputs start with
+    u = (x, xd, xdd, phi, phid, phidd, x_pin, ...)."""
+    d = rm.gpdm.latent_dim
+    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
+    phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
+    b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
+    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
+    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
+    return q, rm.sym.rnea(q, v, a)
+
+
 def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     """Rows of one contact node, u = (x, xd, xdd, phi, phid, phidd, x_pin, lam[6]).
 
@@ -275,13 +287,9 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     """
     d, W = rm.gpdm.latent_dim, rm.weight
     u = ca.SX.sym("u", 3 * d + 10)
-    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
-    phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
+    phi = u[3 * d]
     lam = u[3 * d + 4:]
-    b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
-    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
-    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
-    tau = rm.sym.rnea(q, v, a)
+    q, tau = _anchored_dynamics(rm, u)
     gen = point_generalized_force(rm.sym, rm.geom, q, point_forces(lam * W, rm.mu))
     P = points_function(rm.sym, rm.geom)(q)
     w = toe_wrench(lam, P, rm.mu)  # body weights, moment about the toe tip
@@ -302,7 +310,6 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     return _node_rows("jump_contact_node", u, parts)
 
 
-RIGHT_TOE = "rtoes_end"  # the mirror of TOE
 
 
 def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
@@ -321,14 +328,9 @@ def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     contact schedule in :func:`build_nlp`).  The nodes alone left the needed wrench free to leave
     the cone and the foot between them (measured, issue 6).
     """
-    d, W = rm.gpdm.latent_dim, rm.weight
-    u = ca.SX.sym("u", 3 * d + 4)
-    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
-    phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
-    b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
-    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
-    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
-    tau = rm.sym.rnea(q, v, a)
+    W = rm.weight
+    u = ca.SX.sym("u", 3 * rm.gpdm.latent_dim + 4)
+    q, tau = _anchored_dynamics(rm, u)
     J = rm.sym.frame_jacobian(TOE)(q) + rm.sym.frame_jacobian(RIGHT_TOE)(q)
     fx, fz, my = ca.vertsplit(ca.solve(J.T[SAGITTAL_ROWS, SAGITTAL_ROWS], tau[SAGITTAL_ROWS]) / W)
     P = points_function(rm.sym, rm.geom)(q)
@@ -556,11 +558,15 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
             jac.append(ji)
             names.extend(nm)
 
+    def anchored_inputs(t_stance, t_land):
+        """(x, xd, xdd, phi, phid, phidd, x_pin) at stance (toe at x = 0) and landing (x_L) times."""
+        return ca.vertcat(ca.horzcat(lat_rows(t_stance), lat_rows(t_land)),
+                          ca.horzcat(_time_scaled(_spline_rows(sps, cs, t_stance), 1, ik),
+                                     _time_scaled(_spline_rows(spl, cl, t_land, phases.touchdown), 1, ik)),
+                          ca.horzcat(ca.DM.zeros(1, len(t_stance)), ca.repmat(xL, 1, len(t_land))))
+
     # contact nodes: stance (toe at x = 0), landing (toe at x_L)
-    phis = _time_scaled(_spline_rows(sps, cs, ts), 1, ik)
-    phil = _time_scaled(_spline_rows(spl, cl, tl, phases.touchdown), 1, ik)
-    Uc = ca.vertcat(ca.horzcat(lat_rows(ts), lat_rows(tl)), ca.horzcat(phis, phil),
-                    ca.horzcat(ca.DM.zeros(1, nS), ca.repmat(xL, 1, nL)), Lam)
+    Uc = ca.vertcat(anchored_inputs(ts, tl), Lam)
     if s.contact_model not in ("schedule", "complementarity", "free"):
         raise ValueError(f"contact_model must be 'schedule', 'complementarity' or 'free', got {s.contact_model!r}")
     base_rows = ["dynamics"] + (["torque"] if s.torque_limits else []) + \
@@ -573,10 +579,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     add("contact_rows", Uc, per_node)
     if s.wrench_spacing > 0:  # the needed wrench in the loaded points' cone between the nodes
         tws, twl = (_between(tn, s.wrench_spacing) for tn in (ts, tl))
-        Uw = ca.vertcat(ca.horzcat(lat_rows(tws), lat_rows(twl)),
-                        ca.horzcat(_time_scaled(_spline_rows(sps, cs, tws), 1, ik),
-                                   _time_scaled(_spline_rows(spl, cl, twl, phases.touchdown), 1, ik)),
-                        ca.horzcat(ca.DM.zeros(1, len(tws)), ca.repmat(xL, 1, len(twl))))
+        Uw = anchored_inputs(tws, twl)
         tw = np.concatenate([tws, twl])
         heel_w, ball_w = phases.loaded("heel", tw), phases.loaded("ball", tw)
         back = np.where(heel_w, "cop_heel", np.where(ball_w, "cop_ball", "cop_pad"))

@@ -36,6 +36,7 @@ import pinocchio as pin
 
 from .contact import TOE_PAD, FootGeometry, foot_points, point_jacobians
 from .support_polygon import margin, support_polygon
+from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
 
 
@@ -59,7 +60,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     d = model.createData()
     mass = sum(i.mass for i in model.inertias)
     W = mass * G
-    ids = {n: model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")}
+    ids = {n: model.getFrameId(n) for n in (TOE, RIGHT_TOE)}
     res_max, lat_max, tau_viol, sym_tau, flight_res = 0.0, 0.0, 0.0, 0.0, 0.0
     fz_min, ratio_max, cop_margin = np.inf, 0.0, np.inf
     zmp_margin, com_margin = np.inf, np.inf
@@ -78,8 +79,8 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         else:
             pin.computeJointJacobians(model, d, q)
             pin.framesForwardKinematics(model, d, q)
-        JL = pin.getFrameJacobian(model, d, ids["ltoes_end"], pin.LOCAL_WORLD_ALIGNED)
-        JR = pin.getFrameJacobian(model, d, ids["rtoes_end"], pin.LOCAL_WORLD_ALIGNED)
+        JL = pin.getFrameJacobian(model, d, ids[TOE], pin.LOCAL_WORLD_ALIGNED)
+        JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
         feet_speed[i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         if not contact[i]:
             gen = np.zeros(model.nv)
