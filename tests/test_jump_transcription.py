@@ -74,3 +74,99 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support():
     mass = sum(i.mass for i in js.model.inertias)
     with pytest.raises(ValueError, match="unknown optional row blocks"):
         node_rows(RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, 0.4, mass), jit=False, optional=("wrench",))
+
+
+def _spline_base_nlp(js, **kw):
+    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, base_model="spline", **kw)
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    x = consistent_start(nlp, nlp.x0)
+    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(x))}
+    return s, nlp, parts, trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
+
+
+def test_spline_base_contact_rows_match_numeric_pinocchio():
+    """base_model="spline": at stance and landing nodes the contact rows equal numeric
+    pinocchio.rnea minus the point forces' J^T f (body weights) on the exported motion, the joint
+    torques, and the toe tip's offset from its ground point and the heel height from forward
+    kinematics; the exported base is the spline base."""
+    from latentoc.jump.base import base_to_freeflyer
+    from latentoc.jump.contact import joint_embedding, point_forces, point_jacobians
+
+    js = setup()
+    s, nlp, parts, tr = _spline_base_nlp(js)
+    mass = sum(i.mass for i in js.model.inertias)
+    W = mass * G
+    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")
+    block, layout = node_rows(rm, jit=False)["contact_rows"]
+    sp, sps, spl = nlp.meta["splines"]
+    grid, ph, d = nlp.meta["grid"], js.phases, js.model.createData()
+    node_t = np.concatenate([grid["stance"], grid["land"]])
+    xL = float(parts["x_L"].ravel()[0])
+    for j in (1, 3, len(grid["stance"]) + 2, len(node_t) - 2):
+        t = node_t[j]
+        land = t >= ph.touchdown
+        i = int(np.argmin(np.abs(tr["t"] - t)))
+        phs, off, coef = (spl, ph.touchdown, parts["phi_l"]) if land else (sps, 0.0, parts["phi_s"])
+        X = [sp.evaluate(parts["P"], np.array([t]), k)[0] for k in range(3)]
+        B = [phs.evaluate(coef, np.array([t - off]), k)[0] for k in range(3)]
+        lam = np.asarray(parts["lam"])[:, j]
+        r = np.array(block.rows(np.concatenate([*X, *B, [xL if land else 0.0], lam]))).ravel()
+        # the motion at this instant, numerically
+        q7, v6, a6 = base_to_freeflyer(*B)
+        gp_y = np.array(js.gpdm.mean_function()(X[0])).ravel()
+        E = joint_embedding(js.smap)
+        q = np.concatenate([q7[0], E @ gp_y])
+        np.testing.assert_allclose(q7[0], tr["q"][i][:7], atol=5e-3)  # the exporter's base at the nearest ms
+        # v, a of the joints by finite differences of the GP mean along the spline
+        h = 1e-5
+        ys = [np.array(js.gpdm.mean_function()(sp.evaluate(parts["P"], np.array([t + e]), 0)[0])).ravel()
+              for e in (-h, 0.0, h)]
+        v = np.concatenate([v6[0], E @ (ys[2] - ys[0]) / (2 * h)])
+        a = np.concatenate([a6[0], E @ (ys[2] - 2 * ys[1] + ys[0]) / h ** 2])
+        tau = pin.rnea(js.model, d, q, v, a)
+        Jp = point_jacobians(js.model, d, q, js.geom)
+        f = np.array(point_forces(lam * W, s.mu))
+        gen = sum(Jp[k].T @ np.array([f[k, 0], 0.0, f[k, 1]]) for k in range(3))
+        np.testing.assert_allclose(r[layout["dynamics"]], (tau - gen)[[0, 2, 4]] / W, atol=2e-3)
+        np.testing.assert_allclose(r[layout["torque"]], (tau - gen)[6:][rm.active], atol=0.5)
+        heel, ball, toe = foot_points(js.model, d, js.geom).T
+        np.testing.assert_allclose(r[layout["toe_position"]], [toe[0] - (xL if land else 0.0), toe[2]], atol=1e-9)
+        np.testing.assert_allclose(r[layout["heel_height"]], [heel[2]], atol=1e-9)
+        np.testing.assert_allclose(r[layout["ball_height"]], [ball[2]], atol=1e-9)
+
+
+def test_spline_base_takeoff_and_touchdown_rows_match_numeric_momentum():
+    """base_model="spline": the takeoff rows are the stance state's COM, COM velocity and
+    angular momentum about the COM (pinocchio.computeCentroidalMomentum) minus the flight's
+    takeoff variables; the exported flight starts from that state (continuous base)."""
+    from latentoc.jump.base import base_to_freeflyer
+    from latentoc.jump.contact import joint_embedding
+
+    js = setup()
+    s, nlp, parts, tr = _spline_base_nlp(js)
+    mass = sum(i.mass for i in js.model.inertias)
+    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")
+    block, layout = node_rows(rm, jit=False)["takeoff_rows"]
+    sp, sps, _ = nlp.meta["splines"]
+    t = np.array([js.phases.takeoff])
+    X = [sp.evaluate(parts["P"], t, k)[0] for k in range(3)]
+    B = [sps.evaluate(parts["phi_s"], t, k)[0] for k in range(3)]
+    c_to, cd_to, L_to = (np.asarray(parts[k], float).ravel() for k in ("c_to", "cd_to", "L_to"))
+    p0 = float(np.asarray(parts["pitch_flight"]).ravel()[0])
+    r = np.array(block.rows(np.concatenate([*X, *B, c_to, cd_to, L_to, [p0]]))).ravel()
+    E = joint_embedding(js.smap)
+    h = 1e-6
+    y = [np.array(js.gpdm.mean_function()(sp.evaluate(parts["P"], t + e, 0)[0])).ravel() for e in (-h, 0.0, h)]
+    q7, v6, _ = base_to_freeflyer(B[0], B[1])
+    q = np.concatenate([q7[0], E @ y[1]])
+    v = np.concatenate([v6[0], E @ (y[2] - y[0]) / (2 * h)])
+    d = js.model.createData()
+    hg = pin.computeCentroidalMomentum(js.model, d, q, v)
+    c = d.com[0]
+    expected = np.concatenate([c[[0, 2]] - c_to, hg.linear[[0, 2]] / mass - cd_to, [hg.angular[1] - L_to[0]],
+                               [B[0][2] - p0]])
+    np.testing.assert_allclose(r, expected, atol=1e-6)
+    # the flight variables of the start are this state, and the exported base is continuous
+    np.testing.assert_allclose(r, 0.0, atol=1e-8)
+    i = int(np.searchsorted(tr["t"], js.phases.takeoff))
+    assert np.max(np.abs(tr["q"][i + 1][:3] - tr["q"][i][:3])) < 5e-3

@@ -137,4 +137,11 @@ def test_eq33_feet_distance_of_a_translating_stance():
     v[:, :3] = R.T @ np.array([0.5, 0.0, 0.0])
     q[:, 0] += 0.5 * t
     arrays.update(q=q, v=v)
-    assert np.isclose(verify(model, arrays)["eq33_feet_distance"], 2 * 0.5 * t[-1], rtol=1e-9)
+    r = verify(model, arrays)
+    assert np.isclose(r["eq33_feet_distance"], 2 * 0.5 * t[-1], rtol=1e-9)
+    # the same sliding stance moves the toe tip 2 mm in its contact phase, at its standing height
+    toe0 = training_jumps()[0]
+    d = model.createData()
+    pin.framesForwardKinematics(model, d, toe0.Q[0])
+    assert np.isclose(r["toe_slip"], 0.5 * t[-1], rtol=1e-9)
+    assert np.isclose(r["max_toe_height"], abs(d.oMf[model.getFrameId("ltoes_end")].translation[2]), atol=1e-12)

@@ -116,14 +116,20 @@ def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: fl
 
 
 def initial_guess(js: JumpSetup, s: JumpSettings, fit_base: bool = True) -> dict:
-    """Spline fits of the training foot pitch (the flight base follows from the takeoff state).
-
-    With ``fit_base`` the foot-pitch splines are then refitted so that the toe-pinned base
-    follows the captured base (:func:`fit_anchored_base`).
+    """Spline fits of the training contact-phase base (the flight base follows from the takeoff
+    state): with ``base_model="spline"`` of the captured base (x, z, pitch) itself; toe-pinned,
+    of the foot pitch, and with ``fit_base`` the foot-pitch splines are then refitted so that
+    the toe-pinned base follows the captured base (:func:`fit_anchored_base`).
     """
     t, ph = js.init["t"], js.phases
     st = t <= ph.takeoff + 1e-9
     la = t >= ph.touchdown - 1e-9
+    if s.base_model == "spline":
+        base = js.init["base"]
+        return {"P": js.init["P"], "x_L": js.init["x_L"],
+                "phi_s": BSpline(s.n_base_stance, ph.takeoff).fit(t[st], base[st], fix_ends=False),
+                "phi_l": BSpline(s.n_base_land, ph.duration - ph.touchdown).fit(t[la] - ph.touchdown, base[la],
+                                                                               fix_ends=False)}
     phi_s = BSpline(s.n_phi_stance, ph.takeoff).fit(t[st], np.maximum(js.init["phi"][st], 0), fix_ends=False)[:, 0]
     phi_l = BSpline(s.n_phi_land, ph.duration - ph.touchdown).fit(t[la] - ph.touchdown, np.maximum(js.init["phi"][la], 0),
                                                                  fix_ends=False)[:, 0]
@@ -290,22 +296,28 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     ydd = ca.jtimes(y, x, xdd) + ca.jtimes(yd, x, xd)
     fy = ca.Function("y", [x, xd, xdd], [y, yd, ydd, gp.variance_function()(x)]).map(len(t))
     Y, Yd, Ydd, S2 = (np.array(v).T for v in fy(X.T, Xd.T, Xdd.T))
-    anch_fn = anchored_function(js.sym, js.smap, gp, js.geom)
-    anch = anch_fn.map(len(t))
     st, fl = sn <= ph.takeoff, (sn > ph.takeoff) & (sn < ph.touchdown)
     la = sn >= ph.touchdown
-    phi = np.zeros((3, len(t)))
+    nbc = 3 if s.base_model == "spline" else 1
+    cs, cl = (np.asarray(parts[n], float).reshape(-1, nbc, order="F") for n in ("phi_s", "phi_l"))
+    # contact-phase base inputs: the spline base (x, z, pitch) itself, or the foot pitch phi
+    Z = np.zeros((3, len(t), nbc))
     for j in range(3):
-        phi[j, st] = sps.evaluate(parts["phi_s"], np.clip(sn[st], 0, sps.duration), j)[:, 0] / k ** j
-        phi[j, la] = spl.evaluate(parts["phi_l"], np.clip(sn[la] - ph.touchdown, 0, spl.duration), j)[:, 0] / k ** j
-    xpin = np.where(la, float(parts["x_L"].ravel()[0]), 0.0)
-    B = [np.array(v).T for v in anch(X.T, Xd.T, Xdd.T, phi[0][None], phi[1][None], phi[2][None], xpin[None])]
-    # flight: ballistic from the takeoff state, pitch rate integrated on the 1 kHz grid
-    from .flight import ballistic_base, flight_functions
+        Z[j, st] = sps.evaluate(cs, np.clip(sn[st], 0, sps.duration), j) / k ** j
+        Z[j, la] = spl.evaluate(cl, np.clip(sn[la] - ph.touchdown, 0, spl.duration), j) / k ** j
     t_to = np.array([ph.takeoff])
     x_to = [sp.evaluate(P, t_to, j) / k ** j for j in range(3)]
-    f_to = [sps.evaluate(parts["phi_s"], t_to, j)[:, 0][None] / k ** j for j in range(3)]
-    b_to = [np.array(v).ravel() for v in anch_fn(x_to[0].T, x_to[1].T, x_to[2].T, *f_to, 0.0)]
+    z_to = [sps.evaluate(cs, t_to, j).T / k ** j for j in range(3)]  # nbc x 1
+    if s.base_model == "spline":
+        B = [Z[j] for j in range(3)]
+        b_to = [z_to[0].ravel(), z_to[1].ravel()]
+    else:
+        anch_fn = anchored_function(js.sym, js.smap, gp, js.geom)
+        xpin = np.where(la, float(parts["x_L"].ravel()[0]), 0.0)
+        B = [np.array(v).T for v in anch_fn.map(len(t))(X.T, Xd.T, Xdd.T, *(Z[j].T for j in range(3)), xpin[None])]
+        b_to = [np.array(v).ravel() for v in anch_fn(x_to[0].T, x_to[1].T, x_to[2].T, *z_to, 0.0)]
+    # flight: ballistic from the takeoff state, pitch rate integrated on the 1 kHz grid
+    from .flight import ballistic_base, flight_functions
     tau = np.concatenate([[0.0], t[fl] - k * ph.takeoff])
     Xf = [np.vstack([x_to[j], (X, Xd, Xdd)[j][fl]]).T for j in range(3)]
     bb = ballistic_base(flight_functions(js.sym, js.smap, gp), *Xf, tau, b_to[0], b_to[1], Xf[0][:, 0], Xf[1][:, 0])
@@ -383,7 +395,11 @@ def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSett
                         torque_limits=bool(o.get("torque_limits", True)), polygon=bool(o.get("polygon", True)),
                         contact_model=str(o.get("contact_model", "schedule")),
                         time_scale=bool(o.get("time_scale", True)),
-                        two_phase=bool(o.get("two_phase", True)))
+                        two_phase=bool(o.get("two_phase", True)),
+                        base_model=str(o.get("base_model", JumpSettings.base_model)),
+                        n_base_stance=int(o.get("n_base_stance", JumpSettings.n_base_stance)),
+                        n_base_land=int(o.get("n_base_land", JumpSettings.n_base_land)),
+                        foot_tolerance=float(o.get("foot_tolerance", JumpSettings.foot_tolerance)))
 
 
 def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=None, hessian=None,

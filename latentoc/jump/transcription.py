@@ -167,6 +167,10 @@ class JumpSettings:
     n_land: int = 62
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
+    base_model: str = "pinned"  # "pinned": toe-pinned base (foot pitch splines); "spline": own base splines
+    n_base_stance: int = 8  # control points of the (x, z, pitch) base spline in stance ("spline")
+    n_base_land: int = 8  # ... and in the landing
+    foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact ("spline")
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     contact_model: str = "schedule"  # "schedule" (training contact times), "complementarity" or "free"
     complementarity_eps: float = 1e-4  # body weights x metres ("complementarity" only)
@@ -242,6 +246,7 @@ class RowModel:
     limits: TrainingDynamics
     mu: float
     mass: float
+    base_model: str = "pinned"  # "pinned" (toe-pinned, foot pitch inputs) or "spline" (own base inputs)
 
     @property
     def weight(self) -> float:
@@ -263,32 +268,48 @@ class RowModel:
         return tau_joint[self.active.tolist()]
 
 
-def _anchored_dynamics(rm: RowModel, u: ca.SX) -> tuple[ca.SX, ca.SX]:
-    """q and rnea(q, v, a) of the toe-pinned motion whose inputs start with
-    u = (x, xd, xdd, phi, phid, phidd, x_pin, ...)."""
+BASE_INPUTS = {"pinned": 4, "spline": 10}  # contact-phase base inputs after (x, xd, xdd), x_pin last
+
+
+def _contact_base(rm: RowModel, u: ca.SX):
+    """(b, bd, bdd, x_pin) of a contact-phase input u = (x, xd, xdd, base inputs, ...): for
+    ``"pinned"`` the toe-pinned base of (phi, phid, phidd, x_pin); for ``"spline"`` the inputs
+    (b, bd, bdd, x_pin) themselves."""
     d = rm.gpdm.latent_dim
     x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
-    phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
-    b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
-    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
+    if rm.base_model == "pinned":
+        phi, phid, phidd, xpin = (u[3 * d + k] for k in range(4))
+        b, bd, bdd = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xpin)
+        return b, bd, bdd, xpin
+    r = u[3 * d:3 * d + 10]
+    return r[0:3], r[3:6], r[6:9], r[9]
+
+
+def _anchored_dynamics(rm: RowModel, u: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """q and rnea(q, v, a) of the contact-phase motion whose inputs start with
+    u = (x, xd, xdd, base inputs, ...) (:func:`_contact_base`)."""
+    d = rm.gpdm.latent_dim
+    b, bd, bdd, _ = _contact_base(rm, u)
+    _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, u[:d], u[d:2 * d], u[2 * d:3 * d])
     q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
     return q, rm.sym.rnea(q, v, a)
 
 
 def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
-    """Rows of one contact node, u = (x, xd, xdd, phi, phid, phidd, x_pin, lam[6]).
+    """Rows of one contact node, u = (x, xd, xdd, base inputs, lam[6]) (:func:`_contact_base`).
 
-    The base is toe-pinned (:func:`anchored_function`); the point forces of the heel, ball
-    and toe (``lam`` in body weights on the friction-pyramid edges, :mod:`.contact`) act on
-    their own bodies.  Rows: sagittal base rows of RNEA minus sum J^T f (body weights); joint
-    torques (scaled to the limit range); heel and ball complementarity and ball height; the
-    foot pitch phi >= 0; the ZMP (centre of pressure of both feet) in the support polygon,
-    multiplied by the normal force so that it stays smooth as fz -> 0; the projected COM in it.
+    The point forces of the heel, ball and toe (``lam`` in body weights on the friction-pyramid
+    edges, :mod:`.contact`) act on their own bodies.  Rows: sagittal base rows of RNEA minus
+    sum J^T f (body weights); joint torques (scaled to the limit range); heel and ball
+    complementarity and ball height; the ZMP (centre of pressure of both feet) in the support
+    polygon, multiplied by the normal force so that it stays smooth as fz -> 0; the projected
+    COM in it.  Toe-pinned base: the foot pitch phi >= 0 (``heel_up``).  Spline base: the toe
+    tip's offset from its ground point (x_pin, 0) (``toe_position``) and the heel height.
     """
     d, W = rm.gpdm.latent_dim, rm.weight
-    u = ca.SX.sym("u", 3 * d + 10)
-    phi = u[3 * d]
-    lam = u[3 * d + 4:]
+    nb = BASE_INPUTS[rm.base_model]
+    u = ca.SX.sym("u", 3 * d + nb + 6)
+    lam = u[3 * d + nb:]
     q, tau = _anchored_dynamics(rm, u)
     gen = point_generalized_force(rm.sym, rm.geom, q, point_forces(lam * W, rm.mu))
     P = points_function(rm.sym, rm.geom)(q)
@@ -303,18 +324,21 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
         "heel_complementarity": P[2, 0] * (lam[0] + lam[1]),
         "ball_complementarity": P[2, 1] * (lam[2] + lam[3]),
         "ball_height": P[2, 1],
-        "heel_up": phi,
-        "zmp_polygon": _homogeneous_rows(heel, toe, ca.vertcat(toe[0] * fz - my, 0), fz),
-        "com_polygon": rows(rm.sym.com(q)[:2]),
     }
-    return _node_rows("jump_contact_node", u, parts)
-
-
+    if rm.base_model == "pinned":
+        parts["heel_up"] = u[3 * d]
+    else:
+        parts["toe_position"] = ca.vertcat(P[0, 2] - _contact_base(rm, u)[3], P[2, 2])
+        parts["heel_height"] = P[2, 0]
+    parts["zmp_polygon"] = _homogeneous_rows(heel, toe, ca.vertcat(toe[0] * fz - my, 0), fz)
+    parts["com_polygon"] = rows(rm.sym.com(q)[:2])
+    return _node_rows("jump_contact_node" if rm.base_model == "pinned" else "jump_contact_node_spline_base",
+                      u, parts)
 
 
 def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     """Rows of the contact wrench the motion needs at a sample between contact nodes,
-    u = (x, xd, xdd, phi, phid, phidd, x_pin).
+    u = (x, xd, xdd, base inputs) (:func:`_contact_base`).
 
     No force variables: the three sagittal base rows of RNEA, solved for the (fx, fz, my) of
     each (symmetric) foot at its toe tip (as :func:`.verify.sagittal_contact_wrench`), must lie
@@ -329,7 +353,7 @@ def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     the cone and the foot between them (measured, issue 6).
     """
     W = rm.weight
-    u = ca.SX.sym("u", 3 * rm.gpdm.latent_dim + 4)
+    u = ca.SX.sym("u", 3 * rm.gpdm.latent_dim + BASE_INPUTS[rm.base_model])
     q, tau = _anchored_dynamics(rm, u)
     J = rm.sym.frame_jacobian(TOE)(q) + rm.sym.frame_jacobian(RIGHT_TOE)(q)
     fx, fz, my = ca.vertsplit(ca.solve(J.T[SAGITTAL_ROWS, SAGITTAL_ROWS], tau[SAGITTAL_ROWS]) / W)
@@ -343,7 +367,8 @@ def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
         "cop_ball": (toe_x - P[0, 1]) * fz - my,
         "cop_pad": TOE_PAD * fz - my,
     }
-    return _node_rows("jump_wrench_sample", u, parts)
+    return _node_rows("jump_wrench_sample" if rm.base_model == "pinned" else "jump_wrench_sample_spline_base",
+                      u, parts)
 
 
 def _homogeneous_rows(heel, toe, p_scaled, s):
@@ -390,31 +415,36 @@ def flight_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
 
 
 def takeoff_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
-    """Takeoff state rows, u = (x, xd, xdd, phi, phid, phidd, c_to[2], cd_to[2], L, pitch):
-    the flight variables equal the toe-pinned state's COM, COM velocity, angular momentum and pitch."""
+    """Takeoff state rows, u = (x, xd, xdd, base inputs, c_to[2], cd_to[2], L, pitch): the flight
+    variables equal the stance's COM, COM velocity, angular momentum and pitch at takeoff.
+    Base inputs (:func:`_contact_base`, without x_pin): toe-pinned (phi, phid, phidd) with the
+    toe at x = 0, or the spline base's (b, bd, bdd)."""
     d = rm.gpdm.latent_dim
-    u = ca.SX.sym("u", 3 * d + 9)
-    x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
-    phi, phid, phidd = u[3 * d], u[3 * d + 1], u[3 * d + 2]
-    c_to, cd_to, L, p = u[3 * d + 3:3 * d + 5], u[3 * d + 5:3 * d + 7], u[3 * d + 7], u[3 * d + 8]
-    b, bd, _ = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, 0.0)
+    nb = BASE_INPUTS[rm.base_model] - 1
+    u = ca.SX.sym("u", 3 * d + nb + 6)
+    x, xd = u[:d], u[d:2 * d]
+    c_to, cd_to, L, p = u[3 * d + nb:3 * d + nb + 2], u[3 * d + nb + 2:3 * d + nb + 4], u[3 * d + nb + 4], u[-1]
+    b, bd, _, _ = _contact_base(rm, ca.vertcat(u[:3 * d + nb], 0.0))
     c, cd, Lm = flight_functions(rm.sym, rm.smap, rm.gpdm)["momentum"](x, xd, b, bd)
-    return _node_rows("jump_takeoff", u, {"takeoff": ca.vertcat(c - c_to, cd - cd_to, Lm - L, b[2] - p)})
+    name = "jump_takeoff" if rm.base_model == "pinned" else "jump_takeoff_spline_base"
+    return _node_rows(name, u, {"takeoff": ca.vertcat(c - c_to, cd - cd_to, Lm - L, b[2] - p)})
 
 
 def touchdown_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
-    """Touchdown rows, u = (x, xd, xdd, phi, phid, phidd, x_L, pitch, L, c_to[2], cd_to[2],
-    t_td - takeoff, impulse[6]): the flight's base pose meets the landing's toe-pinned pose, and
+    """Touchdown rows, u = (x, xd, xdd, base inputs, pitch, L, c_to[2], cd_to[2], t_td - takeoff,
+    impulse[6]) with the landing's base inputs (:func:`_contact_base`; toe-pinned: (phi, phid,
+    phidd, x_L), spline: (b, bd, bdd, x_L)): the flight's base pose meets the landing's pose, and
     the inelastic impact ``M_bb (v+ - v-) = (sum J^T Pi)_base`` (module doc; impulse in units
     of 0.1 s of body weight, on the friction-pyramid edges like the forces)."""
     d, W = rm.gpdm.latent_dim, rm.weight
-    u = ca.SX.sym("u", 3 * d + 17)
+    nb = BASE_INPUTS[rm.base_model]
+    u = ca.SX.sym("u", 3 * d + nb + 13)
     x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
-    phi, phid, phidd, xL = (u[3 * d + k] for k in range(4))
-    p, L, c_to, cd_to, tt = u[3 * d + 4], u[3 * d + 5], u[3 * d + 6:3 * d + 8], u[3 * d + 8:3 * d + 10], u[3 * d + 10]
-    imp = u[3 * d + 11:]
+    o = 3 * d + nb
+    p, L, c_to, cd_to, tt = u[o], u[o + 1], u[o + 2:o + 4], u[o + 4:o + 6], u[o + 6]
+    imp = u[o + 7:]
     bm, bdm, _ = _flight_base(rm, x, xd, xdd, p, L, c_to, cd_to, tt)
-    bp, bdp, _ = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)(x, xd, xdd, phi, phid, phidd, xL)
+    bp, bdp, _, _ = _contact_base(rm, u)
     _, qj, _, _ = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
     z3 = ca.DM.zeros(3)
     q = _configuration(bp, z3, z3, qj, 0 * qj, 0 * qj)[0]
@@ -423,7 +453,8 @@ def touchdown_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     Mbb = rm.sym.mass_matrix(q)[:6, :6]
     gen = point_generalized_force(rm.sym, rm.geom, q, point_forces(imp * W * 0.1, rm.mu))
     impact = Mbb @ (v_plus - v_minus) - gen[:6]
-    return _node_rows("jump_touchdown", u, {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W})
+    name = "jump_touchdown" if rm.base_model == "pinned" else "jump_touchdown_spline_base"
+    return _node_rows(name, u, {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W})
 
 
 def pitch_rate_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
@@ -449,7 +480,7 @@ def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = ()
               ) -> dict[str, tuple[NodeRows, dict[str, slice]]]:
     """The row blocks of the jump and the ``optional`` ones named (e.g. ``"wrench_rows"``),
     compiled; each block cached per model, GPDM, geometry, limits and mu."""
-    key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, jit)
+    key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, rm.base_model, jit)
     known = {f.__name__: f for f in OPTIONAL_BLOCKS}
     unknown = [n for n in optional if n not in known]
     if unknown:
@@ -510,14 +541,20 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         raise ValueError(f"the broad jump supports the limited-memory Hessian only, got {s.hessian!r}")
     sym = sym or SymbolicModel(model)
     mass = float(sum(i.mass for i in model.inertias))
-    rm = RowModel(sym, smap, gpdm, geom, limits, s.mu, mass)
+    rm = RowModel(sym, smap, gpdm, geom, limits, s.mu, mass, s.base_model)
     blocks = node_rows(rm, jit=s.jit, optional=("wrench_rows",) if s.wrench_spacing > 0 else ())
     dlat = gpdm.latent_dim
     grid = phases.grid(s.n_stance, s.n_flight, s.n_land, s.push_off_nodes)
     T = phases.duration
     sp = BSpline(s.n_control, T)
-    sps = BSpline(s.n_phi_stance, phases.takeoff)
-    spl = BSpline(s.n_phi_land, T - phases.touchdown)
+    if s.base_model not in BASE_INPUTS:
+        raise ValueError(f"base_model must be one of {sorted(BASE_INPUTS)}, got {s.base_model!r}")
+    spline_base = s.base_model == "spline"
+    if spline_base and s.contact_model != "schedule":
+        raise ValueError(f"base_model 'spline' needs contact_model 'schedule', got {s.contact_model!r}")
+    nbc = 3 if spline_base else 1  # columns of the contact-phase base splines: (x, z, pitch) or phi
+    sps = BSpline(s.n_base_stance if spline_base else s.n_phi_stance, phases.takeoff)
+    spl = BSpline(s.n_base_land if spline_base else s.n_phi_land, T - phases.touchdown)
     ts, tf, tl = grid["stance"], grid["flight"], grid["land"]
     nS, nF, nL = len(ts), len(tf), len(tl)
     nC = nS + nL
@@ -526,8 +563,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     Pfix = np.asarray(init["P"], float)
     Pfree = ca.MX.sym("P", s.n_control - 2, dlat)
     Pm = ca.vertcat(ca.DM(Pfix[:1]), Pfree, ca.DM(Pfix[-1:]))
-    cs = ca.MX.sym("phi_s", s.n_phi_stance)
-    cl = ca.MX.sym("phi_l", s.n_phi_land)
+    cs = ca.MX.sym("base_s" if spline_base else "phi_s", sps.n_control, nbc)
+    cl = ca.MX.sym("base_l" if spline_base else "phi_l", spl.n_control, nbc)
     xL = ca.MX.sym("x_L")
     Lam = ca.MX.sym("lam", 6, nC)
     Limp = ca.MX.sym("lam_impact", 6)
@@ -558,11 +595,16 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
             jac.append(ji)
             names.extend(nm)
 
+    def stance_base(t):
+        return _time_scaled(_spline_rows(sps, cs, t), nbc, ik)  # (phi, phid, phidd) or (b, bd, bdd)
+
+    def land_base(t):
+        return _time_scaled(_spline_rows(spl, cl, t, phases.touchdown), nbc, ik)
+
     def anchored_inputs(t_stance, t_land):
-        """(x, xd, xdd, phi, phid, phidd, x_pin) at stance (toe at x = 0) and landing (x_L) times."""
+        """(x, xd, xdd, base inputs, x_pin) at stance (toe at x = 0) and landing (x_L) times."""
         return ca.vertcat(ca.horzcat(lat_rows(t_stance), lat_rows(t_land)),
-                          ca.horzcat(_time_scaled(_spline_rows(sps, cs, t_stance), 1, ik),
-                                     _time_scaled(_spline_rows(spl, cl, t_land, phases.touchdown), 1, ik)),
+                          ca.horzcat(stance_base(t_stance), land_base(t_land)),
                           ca.horzcat(ca.DM.zeros(1, len(t_stance)), ca.repmat(xL, 1, len(t_land))))
 
     # contact nodes: stance (toe at x = 0), landing (toe at x_L)
@@ -571,7 +613,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         raise ValueError(f"contact_model must be 'schedule', 'complementarity' or 'free', got {s.contact_model!r}")
     base_rows = ["dynamics"] + (["torque"] if s.torque_limits else []) + \
                 (["heel_complementarity", "ball_complementarity"] if s.contact_model == "complementarity" else []) + \
-                ["ball_height", "heel_up"]
+                ["ball_height"] + (["toe_position", "heel_height"] if spline_base else ["heel_up"])
     per_node = [list(base_rows) for _ in range(nS)]
     for tk in tl:
         extra = (["zmp_polygon"] + (["com_polygon"] if tk >= phases.settle - 1e-9 else [])) if s.polygon else []
@@ -588,8 +630,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     # flight: takeoff state variables, pitch by the trapezoid rule on a fine grid, nodes
     tau_f = tf - phases.takeoff
     Xto = lat_rows(np.array([phases.takeoff]))
-    phi_to = _time_scaled(_spline_rows(sps, cs, np.array([phases.takeoff])), 1, ik)
-    add("takeoff_rows", ca.vertcat(Xto, phi_to, c_to, cd_to, L_to, pf[0]), [["takeoff"]])
+    add("takeoff_rows", ca.vertcat(Xto, stance_base(np.array([phases.takeoff])), c_to, cd_to, L_to, pf[0]),
+        [["takeoff"]])
     nsub = max(1, int(s.flight_substeps))
     tau_fine = np.linspace(0.0, tau_f[-1], (nF - 1) * nsub + 1)
     gpd, jpd = lifted_rows(blocks["pitch_rate_rows"][0], ca.vertcat(lat_rows(phases.takeoff + tau_fine),
@@ -604,8 +646,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     Uf = ca.vertcat(lat_rows(tf), pf.T, ca.repmat(ca.vertcat(L_to, c_to, cd_to), 1, nF), kt * ca.DM(tau_f).T)
     add("flight_rows", Uf, [(["torque"] if s.torque_limits else []) + (["flight_clearance"] if 0 < k < nF - 1 else [])
                             for k in range(nF)])
-    phi_td = _time_scaled(_spline_rows(spl, cl, np.array([phases.touchdown]), phases.touchdown), 1, ik)
-    Utd = ca.vertcat(lat_rows(np.array([phases.touchdown])), phi_td, xL, pf[-1], L_to, c_to, cd_to,
+    Utd = ca.vertcat(lat_rows(np.array([phases.touchdown])), land_base(np.array([phases.touchdown])), xL, pf[-1],
+                     L_to, c_to, cd_to,
                      kt * float(tau_f[-1]), Limp)
     add("touchdown_rows", Utd, [["touchdown_position", "impact"]])
 
@@ -622,7 +664,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     J_ = ca.mtimes(ca.diag(ca.DM(row_scale)), ca.vertcat(*jac))
     bounds = {"dynamics": (0, 0), "torque": None, "heel_complementarity": (-np.inf, s.complementarity_eps),
               "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
-              "heel_up": (0, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
+              "heel_up": (0, np.inf), "toe_position": (-s.foot_tolerance, s.foot_tolerance),
+              "heel_height": (-s.contact_tolerance, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
               "takeoff": (0, 0), "pitch_integration": (0, 0), "flight_clearance": (0, np.inf),
               "touchdown_position": (0, 0), "impact": (0, 0), "tube": (-np.inf, s.tube),
               **{k: (0, np.inf) for k in ("wrench_normal", "wrench_friction", "cop_front", "cop_heel", "cop_ball",
@@ -667,17 +710,21 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         imp_ub = ubx[slice(*sizes["lam_impact"])]
         imp_ub[0:2] = 0.0 if not phases.loaded("heel", np.array([phases.touchdown]))[0] else np.inf
         imp_ub[2:4] = 0.0 if not phases.loaded("ball", np.array([phases.touchdown]))[0] else np.inf
-        ubg[names_a == "heel_up"] = np.where(heel, s.flat_foot_pitch, np.inf)
+        if spline_base:  # a loaded heel stays on the ground
+            ubg[names_a == "heel_height"] = np.where(heel, s.contact_tolerance, np.inf)
+        else:
+            ubg[names_a == "heel_up"] = np.where(heel, s.flat_foot_pitch, np.inf)
         lbg[names_a == "ball_height"] = np.where(ball, -s.contact_tolerance, -s.ball_tolerance)
         ubg[names_a == "ball_height"] = np.where(ball, s.contact_tolerance, np.inf)
     x0 = np.zeros(w.numel())
     x0[slice(*sizes["P"])] = Pfix[1:-1].ravel(order="F")
-    x0[slice(*sizes["phi_s"])] = init["phi_s"]
-    x0[slice(*sizes["phi_l"])] = init["phi_l"]
+    x0[slice(*sizes["phi_s"])] = np.ravel(init["phi_s"], order="F")
+    x0[slice(*sizes["phi_l"])] = np.ravel(init["phi_l"], order="F")
     x0[slice(*sizes["x_L"])] = init["x_L"]
     x0[slice(*sizes["lam"])] = init.get("lam", np.full(6 * nC, 1.0 / 12.0))
     x0[slice(*sizes["lam_impact"])] = 0.5
-    fl = flight_guess(rm, sp, sps, Pfix, np.asarray(init["phi_s"], float), phases.takeoff, tau_fine, nsub)
+    fl = flight_guess(rm, sp, sps, Pfix, np.asarray(init["phi_s"], float).reshape(sps.n_control, nbc),
+                      phases.takeoff, tau_fine, nsub)
     for name in ("c_to", "cd_to", "L_to", "pitch_flight"):
         x0[slice(*sizes[name])] = fl[name]
     if s.time_scale:
@@ -702,14 +749,18 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
                     "g_fun": ca.Function("g", [w], [G_]), "jac_fun": jac_g, "sizes": sizes})
 
 
-def flight_guess(rm: RowModel, sp: BSpline, sps: BSpline, P: np.ndarray, phi_s: np.ndarray, takeoff: float,
+def flight_guess(rm: RowModel, sp: BSpline, sps: BSpline, P: np.ndarray, base_s: np.ndarray, takeoff: float,
                  tau_fine: np.ndarray, nsub: int) -> dict[str, np.ndarray]:
-    """Flight variables (takeoff COM, COM velocity, angular momentum, node pitch) of a guess."""
+    """Flight variables (takeoff COM, COM velocity, angular momentum, node pitch) of a guess
+    whose stance base spline coefficients are ``base_s`` (foot pitch, or (x, z, pitch))."""
     t_to = np.array([takeoff])
     x = [sp.evaluate(P, t_to, k) for k in range(3)]
-    f = [sps.evaluate(phi_s[:, None], t_to, k)[:, 0][None] for k in range(3)]
-    anch = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)
-    b, bd, _ = (np.array(v).ravel() for v in anch(x[0].T, x[1].T, x[2].T, *f, 0.0))
+    f = [sps.evaluate(base_s.reshape(sps.n_control, -1), t_to, k).T for k in range(3)]
+    if rm.base_model == "pinned":
+        anch = anchored_function(rm.sym, rm.smap, rm.gpdm, rm.geom)
+        b, bd, _ = (np.array(v).ravel() for v in anch(x[0].T, x[1].T, x[2].T, *f, 0.0))
+    else:
+        b, bd = f[0].ravel(), f[1].ravel()
     fns = flight_functions(rm.sym, rm.smap, rm.gpdm)
     c, cd, L = (np.array(v).ravel() for v in fns["momentum"](x[0].T, x[1].T, b, bd))
     Xf = [sp.evaluate(P, takeoff + tau_fine, k).T for k in range(3)]

@@ -27,7 +27,10 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
 * ``eq33_feet_distance``: the paper's objective (Eq. 33), the integral over the motion of the
   ground-projected speed of both toe tips, ``|J_xy v|`` from the frame Jacobians (twice the jump
   distance only if the feet never move backwards or sideways);
-* with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights).
+* with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights);
+* ``toe_slip``: the largest horizontal travel (max - min of x) of the toe tip within one contact
+  phase (stance, landing), and ``max_toe_height``: its largest |z| in contact; both 0 for a
+  toe pinned to the ground, at most ``foot_tolerance`` for the spline base.
 """
 from __future__ import annotations
 
@@ -70,6 +73,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     loaded = np.asarray(arrays["loaded"]).astype(bool) if "loaded" in arrays else None
     cop_loaded = np.inf
     feet_speed = np.zeros(len(t))
+    toe_xz = np.zeros((len(t), 2))
     for i in range(len(t)):
         q, v, a = Q[i], V[i], A[i]
         tau = pin.rnea(model, d, q, v, a)
@@ -82,6 +86,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         JL = pin.getFrameJacobian(model, d, ids[TOE], pin.LOCAL_WORLD_ALIGNED)
         JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
         feet_speed[i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
+        toe_xz[i] = d.oMf[ids[TOE]].translation[[0, 2]]
         if not contact[i]:
             gen = np.zeros(model.nv)
         elif with_points:  # each point force on its own body (heel, ball: foot; toe: toes)
@@ -130,6 +135,11 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
            "max_torque_violation": tau_viol, "max_point_cone_violation": cone, "max_symmetric_torque": sym_tau}
     # Eq. 33: the integral of the feet's ground-projected speed, both toe tips (trapezoid rule)
     out["eq33_feet_distance"] = float(np.sum(0.5 * (feet_speed[1:] + feet_speed[:-1]) * np.diff(t)))
+    out["toe_slip"], out["max_toe_height"] = 0.0, 0.0
+    for phase in (contact & (t < t_td - 1e-9), contact & (t >= t_td - 1e-9)):
+        if phase.any():
+            out["toe_slip"] = max(out["toe_slip"], float(np.ptp(toe_xz[phase, 0])))
+            out["max_toe_height"] = max(out["max_toe_height"], float(np.max(np.abs(toe_xz[phase, 1]))))
     if loaded is not None:
         out["cop_margin_loaded"] = float(cop_loaded)
     if "sigma2" in arrays:
