@@ -107,7 +107,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
               f"ZMP margin {r['zmp_margin']:.3f} m, COM margin {r['com_margin']:.3f} m, "
               f"torque-limit excess {r['max_torque_violation']:.2g} N m")
         if r.get("toe_slip") is not None:
-            print(f"  toe tip in contact: slip {100 * r['toe_slip']:.2f} cm, height up to {100 * r['max_toe_height']:.2f} cm")
+            print(f"  toe tip: forward travel {r['toe_displacement']:.3f} m; in contact slip {100 * r['toe_slip']:.2f} cm, "
+                  f"height up to {100 * r['max_toe_height']:.2f} cm")
         if r.get("eq33_feet_distance") is not None:
             print(f"  Eq. 33 feet distance (both toe tips) {r['eq33_feet_distance']:.3f} m")
     print(f"  times: gpdm {r['gpdm_time_s']:.2f} s, build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s;"

@@ -105,4 +105,4 @@ def test_solve_summary_reports_the_contact_checks(monkeypatch, capsys):
     assert f"friction ratio {checks['max_friction_ratio']:.3f} (mu 0.4)" in text
     assert f"centre-of-pressure margin {checks['cop_margin_loaded']:.3f} m" in text
     assert f"Eq. 33 feet distance (both toe tips) {checks['eq33_feet_distance']:.3f} m" in text
-    assert f"toe tip in contact: slip {100 * checks['toe_slip']:.2f} cm" in text
+    assert f"toe tip: forward travel {checks['toe_displacement']:.3f} m; in contact slip {100 * checks['toe_slip']:.2f} cm" in text

@@ -1,5 +1,6 @@
 """The phase-1 start: training guess made consistent with the NLP's linear equalities."""
 import numpy as np
+import pytest
 
 from latentoc.jump.problem import consistent_start, initial_guess, setup
 from latentoc.jump.transcription import JumpSettings, build_nlp
@@ -34,7 +35,7 @@ def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
     from latentoc.spline import BSpline
 
     js = setup()
-    s = JumpSettings()
+    s = JumpSettings(base_model="pinned")
     ph = js.phases
     anch = anchored_function(js.sym, js.smap, js.gpdm, js.geom)
     tt = np.array([ph.takeoff])
@@ -51,11 +52,12 @@ def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
     assert np.all(np.abs(fitted - captured) < [0.1, 0.15, 0.1])
 
 
-def test_lifted_jacobian_matches_finite_differences():
+@pytest.mark.parametrize("base_model", ["spline", "pinned"])
+def test_lifted_jacobian_matches_finite_differences(base_model):
     """The NLP's jac_g (compiled node Jacobians chained through the affine node inputs) against
-    central differences of its constraint rows along random directions."""
+    central differences of its constraint rows along random directions, for both base models."""
     js = setup()
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
+    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, base_model=base_model)
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     rng = np.random.default_rng(0)
     x = nlp.x0 + 1e-3 * rng.standard_normal(nlp.x0.size)

@@ -15,13 +15,13 @@ def test_wrench_rows_are_the_cone_of_the_needed_wrench():
     on the exported 1 kHz motion (verify.sagittal_contact_wrench), its cone and its centre of
     pressure rows, in body weights."""
     js = setup()
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False)
+    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, base_model="pinned")
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     x = consistent_start(nlp, nlp.x0)
     parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(x))}
     tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
     mass = sum(i.mass for i in js.model.inertias)
-    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass)
+    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "pinned")
     block, layout = node_rows(rm, jit=False, optional=("wrench_rows",))["wrench_rows"]
     sp, sps, spl = nlp.meta["splines"]
     ph, d = js.phases, js.model.createData()

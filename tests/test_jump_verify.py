@@ -144,4 +144,5 @@ def test_eq33_feet_distance_of_a_translating_stance():
     d = model.createData()
     pin.framesForwardKinematics(model, d, toe0.Q[0])
     assert np.isclose(r["toe_slip"], 0.5 * t[-1], rtol=1e-9)
+    assert np.isclose(r["toe_displacement"], 0.5 * t[-1], rtol=1e-9)
     assert np.isclose(r["max_toe_height"], abs(d.oMf[model.getFrameId("ltoes_end")].translation[2]), atol=1e-12)

@@ -29,7 +29,8 @@ def main(argv: list[str] | None = None) -> int:
     for tube in args.tubes:
         if args.quick:
             s = JumpSettings(tube=tube, n_stance=6, n_flight=6, n_land=8, torque_limits=False, polygon=False,
-                             contact_model="free", max_iter=args.max_iter, two_phase=not args.one_phase)
+                             contact_model="free", base_model="pinned", max_iter=args.max_iter,
+                             two_phase=not args.one_phase)
         else:
             s = JumpSettings(tube=tube, max_iter=args.max_iter, two_phase=not args.one_phase)
         c0 = time.process_time()

@@ -4,8 +4,10 @@ Decision variables
 ------------------
 * the free latent control points P[1:-1] of the B-spline x(t) (m = 21, d = 3; the end
   points stay on the training path, Sect. 4.2 "boundary conditions");
-* the foot pitch splines phi_s (stance) and phi_l (landing) of the toe-pinned anchoring
-  (:mod:`.contact`) and the landing toe position x_L;
+* the contact-phase base splines (variables ``phi_s`` in stance and ``phi_l`` in the landing):
+  with ``base_model="spline"`` the base's own (x, z, pitch) B-splines (8 control points each),
+  with ``"pinned"`` the foot pitch of the toe-pinned anchoring (:mod:`.contact`); and the
+  landing toe position x_L;
 * contact force generator weights (6 per contact node: heel, ball and toe on the two edges
   of their friction pyramid) and the touchdown impulse (6);
 * the flight's takeoff state (COM, COM velocity, angular momentum) and its pitch at the
@@ -18,10 +20,25 @@ Decision variables
   takeoff COM height mismatch of 2.3 cm, every other row satisfied (measured, issue 6).
 
 Joint motion: y = mu_Q(x(t)) (GPDM mean, Eq. 18), y' and y'' by the chain rule
-(Eq. 26-28); the right side is the mirror image.  Base: anchored in stance and landing,
-ballistic in flight (the paper's forward "hybrid dynamics", integrated in closed form from
-the takeoff state, :mod:`.flight`); in contact the base rows of RNEA equal sum J^T f at
-every node.  The touchdown position of the flight must meet the landing's pinned toe.
+(Eq. 26-28); the right side is the mirror image.  Base in flight: ballistic (the paper's
+forward "hybrid dynamics", integrated in closed form from the takeoff state, :mod:`.flight`).
+Base in contact, two models:
+
+* ``"spline"`` (the default): the base has its own smooth motion, and the feet stay on the
+  ground through rows: the toe tip within ``foot_tolerance`` (1 cm) of its ground point (0, 0)
+  in stance and (x_L, 0) in the landing, a loaded heel or ball within ``contact_tolerance`` of
+  the ground.  The base rows of RNEA equal sum J^T f at every node, and the forces follow from
+  the base's accelerations, as in the paper's simulation;
+* ``"pinned"``: the toe tip is fixed exactly and the base follows from the leg joints by
+  kinematics (:func:`anchored_function`), with the foot pitch free.  Every error of the learned
+  leg joints then becomes a base acceleration: along the training fit the motion needs normal
+  forces of -1.3 to 2.1 and horizontal forces of -2.6 to 3.7 body weights per foot, where the
+  captured motion with its own (smoothed) base needs 0.07 to 1.23 and -0.01 to 0.32, and the GP
+  mean's joints with a spline of the captured base 0.59 to 1.05 and -0.35 to 0.81 (measured,
+  issue 6).  The 1 cm tolerance is of the size of the capture's own toe motion in stance
+  (1.0 cm forward, -1.5 to +0.5 cm vertically).
+
+The touchdown position of the flight must meet the landing's base.
 
 Impact at touchdown: perfectly inelastic for the feet (restitution 0): the toe tip stops
 (anchoring), the joints keep their (prescribed, continuous) velocities, and the base
@@ -167,7 +184,7 @@ class JumpSettings:
     n_land: int = 62
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
-    base_model: str = "pinned"  # "pinned": toe-pinned base (foot pitch splines); "spline": own base splines
+    base_model: str = "spline"  # "spline": the base's own splines; "pinned": toe-pinned (foot pitch splines)
     n_base_stance: int = 8  # control points of the (x, z, pitch) base spline in stance ("spline")
     n_base_land: int = 8  # ... and in the landing
     foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact ("spline")
@@ -246,7 +263,7 @@ class RowModel:
     limits: TrainingDynamics
     mu: float
     mass: float
-    base_model: str = "pinned"  # "pinned" (toe-pinned, foot pitch inputs) or "spline" (own base inputs)
+    base_model: str = "spline"  # "spline" (own base inputs) or "pinned" (toe-pinned, foot pitch inputs)
 
     @property
     def weight(self) -> float:

@@ -30,7 +30,9 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
 * with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights);
 * ``toe_slip``: the largest horizontal travel (max - min of x) of the toe tip within one contact
   phase (stance, landing), and ``max_toe_height``: its largest |z| in contact; both 0 for a
-  toe pinned to the ground, at most ``foot_tolerance`` for the spline base.
+  toe pinned to the ground, at most ``foot_tolerance`` for the spline base;
+* ``toe_displacement``: the toe tip's forward travel from the first to the last sample, the jump
+  distance measured on the motion itself (the NLP's objective is its landing ground point x_L).
 """
 from __future__ import annotations
 
@@ -135,6 +137,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
            "max_torque_violation": tau_viol, "max_point_cone_violation": cone, "max_symmetric_torque": sym_tau}
     # Eq. 33: the integral of the feet's ground-projected speed, both toe tips (trapezoid rule)
     out["eq33_feet_distance"] = float(np.sum(0.5 * (feet_speed[1:] + feet_speed[:-1]) * np.diff(t)))
+    out["toe_displacement"] = float(toe_xz[-1, 0] - toe_xz[0, 0])
     out["toe_slip"], out["max_toe_height"] = 0.0, 0.0
     for phase in (contact & (t < t_td - 1e-9), contact & (t >= t_td - 1e-9)):
         if phase.any():
