@@ -399,7 +399,7 @@ def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSett
     o = problem.options
     h = hessian or problem.hessian
     return JumpSettings(tube=float(tube), mu=float(o.get("friction", 0.4)), n_control=int(problem.control_points),
-                        n_stance=int(o.get("n_stance", 32)), n_flight=int(o.get("n_flight", 20)),
+                        n_stance=int(o.get("n_stance", 32)), n_flight=int(o.get("n_flight", JumpSettings.n_flight)),
                         n_land=int(o.get("n_land", 62)), max_iter=int(problem.max_iter), tol=float(problem.tol),
                         hessian="limited-memory" if h in ("lbfgs", "limited-memory") else "exact",
                         torque_limits=bool(o.get("torque_limits", True)), polygon=bool(o.get("polygon", True)),

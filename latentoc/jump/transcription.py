@@ -180,7 +180,7 @@ class JumpSettings:
     n_control: int = 21  # paper 11; 11 cannot follow the push-off (see the module doc)
     n_stance: int = 32  # contact nodes every 10 ms: sparser grids let the motion wobble between nodes
     push_off_nodes: tuple[float, int] = (0.0, 0)  # (span s, n): n more stance nodes just before takeoff
-    n_flight: int = 20
+    n_flight: int = 40  # every 10 ms; with 20 the hip torque left its limit by 32 N m between flight nodes
     n_land: int = 62
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
