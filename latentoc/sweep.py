@@ -28,8 +28,8 @@ _FIELDS = ("method", "tube_spec", "tube", "tube_relative", "joint_range_deg", "l
            "max_tube_violation", "quadrature_error", "warm_start")
 # the 1 kHz verification of contact problems (latentoc.jump.verify), kept when a result has them
 _CHECKS = ("max_dynamics_residual", "max_flight_residual", "min_normal_force", "max_friction_ratio", "cop_margin",
-           "zmp_margin", "com_margin", "max_torque_violation", "max_point_cone_violation", "max_sigma2",
-           "time_scale")
+           "cop_margin_loaded", "zmp_margin", "com_margin", "max_torque_violation", "max_point_cone_violation",
+           "max_sigma2", "time_scale", "toe_displacement", "toe_slip", "eq33_feet_distance")
 
 
 def _row(r: dict[str, Any]) -> dict[str, Any]:

@@ -144,6 +144,21 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   (43 s, 0.29 m), phase 2 converges at 0.373 m (86 s in all), the tube now binds (max sigma^2
   0.1603), but the 1 kHz check is no better (centre of pressure -0.067 m, torque excess 33 N m),
   so the jump keeps the learned noise.
+* the spline base (``base_model="spline"``, this version's default; 8 + 8 base control points, toe
+  within 1 cm): along the training fit the needed wrench falls from the toe-pinned -1.3..2.1
+  (fz) and -2.6..3.7 (fx) body weights to 0.59..1.05 and -0.35..0.81.  Cold two-phase solves
+  (phase 1 423 iterations, 0.61 m; 2 shared cores, compiled rows): without wrench samples
+  1.21 m at delta 0.005 and 1.24 m at 0.16 (111 iterations, 239 s), 1 kHz check at 0.16:
+  friction ratio 0.48, centre-of-pressure margin -0.08 m, torque excess 26 N m; with samples
+  every 5 ms in phase 2 (phase 1 without them: with them it did not converge in 1500 iterations,
+  violation 0.01): 0.71 m at 0.005 and 0.85 m at 0.16 (324 iterations, 173 s), 1 kHz check at
+  0.16: friction ratio 0.47 (at fz 0.2 body weights, 0.01 body weights over the cone), centre of
+  pressure -0.012 m behind the loaded support (at heel-off), ZMP 0.0, COM 0.0, torque excess
+  7.5 N m; samples every 2.5 ms (warm): 0.83 m and about the same check.  With 20 flight nodes
+  the hip torque left its limit by 32 N m between them at 0.005; 40 nodes (10 ms): 1.9 N m.
+  With a 5 mm foot tolerance (delta 0.16): 0.68 m, friction ratio 0.355, centre of pressure
+  -0.3 mm, torque excess 4.6 N m, 672 iterations (335 s): the tolerance trades distance for
+  validity.
 """
 from __future__ import annotations
 
