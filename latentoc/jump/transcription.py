@@ -55,14 +55,17 @@ keeps the foot flat, a loaded ball stays on the ground, unloaded points carry no
 :mod:`.phases`; ``contact_model="complementarity"`` keeps the earlier relaxed complementarity), no
 ground penetration in flight, ZMP in the support polygon over the landing and the projected
 COM in it once the landing has settled (Eq. 35, 36).
-Objective (Eq. 33): maximise the jump distance x_L - x_0 of the pinned toe tip.
+Objective (Eq. 33): maximise the jump distance x_L - x_0 between the toe tip's ground points
+(the motion's own toe travel, within ``foot_tolerance`` of it, is ``verify``'s ``toe_displacement``).
 
 Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): the base rows hold at
 every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with the collocated base
 spline it replaced).  Contact phases: the base rows, cone, CoP, torque limits and
-contact schedule hold at nodes every 10 ms (node counts 32/20/62); the point forces act on
-their own bodies (heel and ball on the foot, toe tip on the toes), as in the torque-limit
-estimate.  The exported motion is checked on 1 kHz by :mod:`.verify`.
+contact schedule hold at nodes every 10 ms (node counts 32/40/62; the flight's torque rows
+also every 10 ms), and the needed wrench's cone and centre of pressure every ``wrench_spacing``
+between them (:func:`wrench_rows`); the point forces act on their own bodies (heel and ball on
+the foot, toe tip on the toes), as in the torque-limit estimate.  The exported motion is checked
+on 1 kHz by :mod:`.verify`.
 
 Derivatives (:mod:`.lifted`): every row block is a per-node SX Function of inputs affine in
 the decision vector (contact node, flight node, takeoff, touchdown, pitch rate, tube),
