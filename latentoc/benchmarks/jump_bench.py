@@ -14,13 +14,14 @@ import time
 
 def main(argv: list[str] | None = None) -> int:
     """Print setup, build and solve time for each tube; returns 0."""
-    from latentoc.jump.problem import setup, solve_broad_jump
+    from latentoc.jump.problem import settings_from_problem, setup, solve_broad_jump
     from latentoc.jump.transcription import JumpSettings
+    from latentoc.problem import load_problem
 
     ap = argparse.ArgumentParser(prog="jump_bench", description=__doc__.splitlines()[0])
     ap.add_argument("--tubes", type=float, nargs="+", default=[1.0])
     ap.add_argument("--quick", action="store_true", help="small node count (6/6/8), no torque/polygon limits, no contact schedule")
-    ap.add_argument("--max-iter", type=int, default=400)
+    ap.add_argument("--max-iter", type=int, default=1500)
     ap.add_argument("--one-phase", action="store_true", help="skip the phase-1 feasibility solve")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
@@ -31,8 +32,9 @@ def main(argv: list[str] | None = None) -> int:
             s = JumpSettings(tube=tube, n_stance=6, n_flight=6, n_land=8, torque_limits=False, polygon=False,
                              contact_model="free", base_model="pinned", max_iter=args.max_iter,
                              two_phase=not args.one_phase)
-        else:
-            s = JumpSettings(tube=tube, max_iter=args.max_iter, two_phase=not args.one_phase)
+        else:  # the packaged problem's settings (problems/broad-jump.toml), as `solve broad-jump`
+            s = settings_from_problem(load_problem("broad-jump"), tube, None)
+            s.max_iter, s.two_phase = args.max_iter, not args.one_phase
         c0 = time.process_time()
         out = solve_broad_jump(js, s)
         r, st = out["result"], out["nlp"].solver.stats()
