@@ -66,7 +66,12 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support():
     grid = n1.meta["grid"]
     expect = sum(int(np.ceil((b - a) / 0.02 - 1e-9)) - 1 for tn in (grid["stance"], grid["land"])
                  for a, b in zip(tn[:-1], tn[1:]))
-    assert n_samples == expect > 0
+    ph = js.phases  # plus one sample just inside each unloaded interval of the schedule
+    switches = ph.switch_samples()
+    assert len(switches) == 4 and np.allclose(switches, [ph.heel_off + 5e-4, ph.ball_off + 5e-4,
+                                                         ph.ball_strike - 5e-4, ph.heel_strike - 5e-4])
+    assert not any(ph.loaded(p, np.array([tk]))[0] for tk, p in zip(switches, ("heel", "ball", "ball", "heel")))
+    assert n_samples == expect + 4 and expect > 0
     assert (names == "wrench_friction").sum() == 2 * n_samples and (names == "cop_front").sum() == n_samples
     n_back = sum(int((names == k).sum()) for k in ("cop_heel", "cop_ball", "cop_pad"))
     assert n_back == n_samples and (names == "cop_pad").sum() > 0 and (names == "cop_heel").sum() > 0

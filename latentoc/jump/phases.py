@@ -55,6 +55,15 @@ class Phases:
         off, strike = {"heel": (self.heel_off, self.heel_strike), "ball": (self.ball_off, self.ball_strike)}[point]
         return (t <= off + 1e-9) | (t >= strike - 1e-9)
 
+    def switch_samples(self, eps: float = 5e-4) -> np.ndarray:
+        """Times just inside each unloaded interval of the contact schedule: ``eps`` after the heel
+        and ball leave the ground and before they strike it (empty without a schedule)."""
+        if self.heel_off is None:
+            return np.zeros(0)
+        t = np.array([self.heel_off + eps, self.ball_off + eps, self.ball_strike - eps, self.heel_strike - eps])
+        inside = ((t > 0) & (t < self.takeoff)) | ((t > self.touchdown) & (t < self.duration))
+        return t[inside]
+
     def grid(self, n_stance: int, n_flight: int, n_land: int, push_off: tuple[float, int] = (0.0, 0)
              ) -> dict[str, np.ndarray]:
         """Node times; ``push_off = (span, n)`` adds n more stance nodes, evenly spaced, in the
