@@ -338,8 +338,9 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     Q, V, A = np.column_stack([q7, Y @ E.T]), np.column_stack([v6, Yd @ E.T]), np.column_stack([a6, Ydd @ E.T])
     # contact forces: the NLP's point forces (heel, ball, toe on the friction-pyramid edges, in
     # body weights) at its nodes, interpolated linearly in time within each contact phase, then
-    # corrected by the least-norm change of the six edge weights that balances the three
-    # sagittal base rows of RNEA exactly (``force_correction`` records its size)
+    # the nearest edge weights that balance the three sagittal base rows of RNEA exactly
+    # (:func:`balanced_edge_weights`: unilateral, in the cone, loaded points only and the joint
+    # torques in their limits where such weights exist; ``force_correction`` records the change)
     from .contact import foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 
     grid, W = nlp.meta["grid"], nlp.meta["mass"] * 9.81
@@ -362,10 +363,11 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
         if st[i] or la[i]:
             Jp = point_jacobians(js.model, d, Q[i], js.geom)
             C = generator_columns(Jp, s.mu) * W  # nv x 6, per body weight of edge weight
-            r = full[rows] - C[rows] @ lam_t[i]
-            dl = C[rows].T @ np.linalg.solve(C[rows] @ C[rows].T, r)
-            lam_t[i] += dl
-            correction[i] = float(np.max(np.abs(dl)))
+            free = (np.repeat([ph.loaded(p, sn[i:i + 1])[0] for p in ("heel", "ball", "toe")], 2)
+                    if s.contact_model == "schedule" else np.ones(6, bool))
+            lam_new = balanced_edge_weights(C, full, lam_t[i], free, js.limits.tau_min, js.limits.tau_max)
+            correction[i] = float(np.max(np.abs(lam_new - lam_t[i])))
+            lam_t[i] = lam_new
             full = full - C @ lam_t[i]
             fs = point_forces(lam_t[i] * W, s.mu)
             forces[i] = np.array(fs)
@@ -387,6 +389,49 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
             "q_initial": js.training.Q, "t_initial": js.training.t, "P_initial": js.init["P"],
             "tau_min": js.limits.tau_min, "tau_max": js.limits.tau_max, "friction": s.mu,
             "model": js.model.saveToString()}
+
+
+def balanced_edge_weights(C: np.ndarray, tau: np.ndarray, lam0: np.ndarray, free: np.ndarray,
+                          tau_min: np.ndarray, tau_max: np.ndarray) -> np.ndarray:
+    """Friction-pyramid edge weights nearest ``lam0`` whose generalized force ``C lam`` balances
+    the sagittal base rows of ``tau = rnea(q, v, a)`` exactly.
+
+    ``C`` (nv x 6) maps edge weights to generalized forces.  First choice: ``lam >= 0``, the
+    edges of unloaded points (``free`` False) zero, and the joint torques ``tau[6:] - (C lam)[6:]``
+    within ``[tau_min, tau_max]``; then without the torque limits; last the least-norm change of
+    ``lam0``'s loaded edges, which balances the rows (if they can) but may leave the cone (the
+    motion needs a wrench no unilateral forces give).  The choice is the exporter's: between the NLP's nodes the forces
+    are not decision variables, and any split that balances the motion is one it admits.
+    """
+    from scipy.optimize import minimize
+
+    rows = [0, 2, 4]
+    Cr, r = C[rows], tau[rows]
+    scale = max(float(np.max(np.abs(Cr))), 1e-9)
+    act = tau_max - tau_min > 1e-6
+    Cj, tj = C[6:][act], tau[6:][act]
+    x0 = np.clip(np.where(free, lam0, 0.0), 0.0, None)
+    for with_torque in (True, False):
+        cons = [{"type": "eq", "fun": lambda x: (Cr[:, free] @ x - r) / scale, "jac": lambda x: Cr[:, free] / scale}]
+        if with_torque:
+            lo, hi = tj - tau_max[act], tj - tau_min[act]  # tau_min <= tj - Cj lam <= tau_max
+            cons.append({"type": "ineq", "fun": lambda x: np.concatenate([hi - Cj[:, free] @ x, Cj[:, free] @ x - lo]),
+                         "jac": lambda x: np.vstack([-Cj[:, free], Cj[:, free]])})
+        res = minimize(lambda x: float(np.sum((x - x0[free]) ** 2)), x0[free], jac=lambda x: 2 * (x - x0[free]),
+                       bounds=[(0.0, None)] * int(free.sum()), constraints=cons, method="SLSQP",
+                       options={"maxiter": 200, "ftol": 1e-12})
+        x = np.maximum(res.x, 0.0)
+        ok = np.max(np.abs(Cr[:, free] @ x - r)) <= 1e-8 * scale
+        if with_torque:
+            tq = tj - Cj[:, free] @ x
+            ok = ok and np.all(tq >= tau_min[act] - 1e-6) and np.all(tq <= tau_max[act] + 1e-6)
+        if res.success and ok:
+            lam = np.zeros(6)
+            lam[free] = x
+            return lam
+    lam = np.where(free, lam0, 0.0)
+    lam[free] += np.linalg.lstsq(Cr[:, free], r - Cr @ lam, rcond=None)[0]
+    return lam
 
 
 # ------------------------------------------------------------------ solve layer glue
