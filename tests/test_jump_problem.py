@@ -1,0 +1,50 @@
+"""The broad-jump solve layer (latentoc.jump.problem.solve_jump_problem): warm starts."""
+import numpy as np
+
+import latentoc.jump.problem as jp
+import latentoc.jump.verify
+from latentoc.problem import load_problem
+
+
+class _GP:
+    latent_dim, beta = 3, np.ones(3)
+
+    def tube_size(self):
+        return 1e-4
+
+
+class _JS:
+    gpdm, model = _GP(), None
+
+
+def _fake_solve(calls, succeed):
+    def solve(js, s, x0=None):
+        warm = x0 is not None
+        calls.append(warm)
+        ok = succeed(warm, s.tube)
+        return {"result": {"success": ok, "warm_start": warm, "status": "Solve_Succeeded" if ok else "Maximum_Iterations_Exceeded",
+                           "iterations": 7, "solve_time_s": 1.0, "distance": 0.8 if ok else 0.4,
+                           "distance_initial": 0.73},
+                "w": np.full(3, s.tube), "nlp": type("N", (), {"x0": np.zeros(3), "lbg": np.zeros(2)})()}
+    return solve
+
+
+def test_failed_warm_start_is_solved_again_from_the_training_fit(monkeypatch):
+    """A warm start from the previous tube's optimum that does not converge is re-solved cold;
+    the result is the cold one and records the failed attempt; a converged warm start is kept."""
+    calls = []
+    monkeypatch.setattr(jp, "_SETUP_CACHE", {})
+    monkeypatch.setattr(jp, "_WARM", {})
+    monkeypatch.setattr(jp, "setup", lambda *a, **k: _JS())
+    monkeypatch.setattr(jp, "solve_broad_jump", _fake_solve(calls, lambda warm, tube: not (warm and tube == 0.08)))
+    monkeypatch.setattr(jp, "trajectory", lambda js, out: {"sigma2": np.zeros(2)})
+    monkeypatch.setattr(latentoc.jump.verify, "verify", lambda *a, **k: {})
+    problem = load_problem("broad-jump")
+    first = jp.solve_jump_problem(problem, tube=0.04).result
+    assert calls == [False] and first["success"] and "failed_warm_start" not in first
+    second = jp.solve_jump_problem(problem, tube=0.08).result
+    assert calls == [False, True, False] and second["success"] and not second["warm_start"]
+    assert second["failed_warm_start"] == {"status": "Maximum_Iterations_Exceeded", "iterations": 7,
+                                           "solve_time_s": 1.0, "distance": 0.4}
+    third = jp.solve_jump_problem(problem, tube=0.16).result
+    assert calls == [False, True, False, True] and third["warm_start"] and "failed_warm_start" not in third
