@@ -221,7 +221,8 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
     continuation (warm start) from a smaller tube, whose optimum is feasible for a larger one.
     """
     s = settings or JumpSettings()
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    guess = initial_guess(js, s)
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, guess, js.sym)
     warm = x0 is not None and np.size(x0) == nlp.x0.size
     build_time = nlp.build_time
     t0 = time.perf_counter()
@@ -234,7 +235,7 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
         n1 = nlp
         if s.wrench_spacing > 0:
             n1 = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, replace(s, wrench_spacing=0.0),
-                           initial_guess(js, s), js.sym)
+                           guess, js.sym)
             build_time += n1.build_time
             t0 = time.perf_counter()
         sol1 = n1.solver(x0=start, p=0.0, lbx=n1.lbx, ubx=n1.ubx, lbg=n1.lbg, ubg=n1.ubg)
@@ -244,8 +245,7 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
         w1 = np.array(sol1["x"]).ravel()
         phase1 = {"status": st1["return_status"], "success": bool(st1["success"]), "iterations": int(st1["iter_count"]),
                   "time_s": time.perf_counter() - t0, "max_constraint_violation": float(v1.max()),
-                  "distance": float(np.array(n1.unpack(w1)[3]).ravel()[0]),
-                  "wrench_samples": n1 is nlp and s.wrench_spacing > 0}
+                  "distance": float(np.array(n1.unpack(w1)[3]).ravel()[0])}
         start = w1
     t1 = time.perf_counter()
     sol = nlp.solver(x0=start, p=1.0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
@@ -358,13 +358,13 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
     wrench = np.zeros((len(t), 6))
     correction = np.zeros(len(t))
     P_feet = np.zeros((len(t), 3, 3))
+    loaded = np.column_stack([ph.loaded(p, sn) & (st | la) for p in ("heel", "ball", "toe")])  # contact schedule
     for i in range(len(t)):
         full = pin.rnea(js.model, d, Q[i], V[i], A[i])
         if st[i] or la[i]:
             Jp = point_jacobians(js.model, d, Q[i], js.geom)
             C = generator_columns(Jp, s.mu) * W  # nv x 6, per body weight of edge weight
-            free = (np.repeat([ph.loaded(p, sn[i:i + 1])[0] for p in ("heel", "ball", "toe")], 2)
-                    if s.contact_model == "schedule" else np.ones(6, bool))
+            free = np.repeat(loaded[i], 2) if s.contact_model == "schedule" else np.ones(6, bool)
             lam_new = balanced_edge_weights(C, full, lam_t[i], free, js.limits.tau_min, js.limits.tau_max)
             correction[i] = float(np.max(np.abs(lam_new - lam_t[i])))
             lam_t[i] = lam_new
@@ -380,7 +380,7 @@ def trajectory(js: JumpSetup, out: dict, rate_hz: float = 1000.0) -> dict:
         node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_feet[i], s.mu)).ravel()
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
             "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
-            "loaded": np.column_stack([ph.loaded(p, sn) & (st | la) for p in ("heel", "ball", "toe")]).astype(np.int8),
+            "loaded": loaded.astype(np.int8),
             "sigma2": S2.ravel(), "latent": X, "control_points": P, "node_t": node_t, "node_wrench": node_w,
             "node_lambda": lam_nodes.T, "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end",
                                                                      "rfoot", "rfoot_end", "rtoes_end"]),
