@@ -37,7 +37,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-__all__ = ["NLPResult", "build_solver", "solve_nlp", "HESSIANS", "compiled_functions", "jit_cache_dir"]
+__all__ = ["NLPResult", "build_solver", "solve_nlp", "HESSIANS", "compiled_functions", "jit_cache_dir", "jit_enabled"]
 
 HESSIANS = ("exact", "lbfgs")
 
@@ -113,6 +113,11 @@ def _compiler() -> str | None:
     return shutil.which(cc) or shutil.which("cc")
 
 
+def jit_enabled() -> bool:
+    """False when ``LATENTOC_JIT=0``: the Functions are evaluated in CasADi's virtual machine."""
+    return os.environ.get("LATENTOC_JIT", "1") != "0"
+
+
 def compiled_functions(functions: list[ca.Function], flags: tuple[str, ...] = JIT_FLAGS) -> list[ca.Function]:
     """The Functions compiled to C and loaded back (same names, inputs, outputs and values).
 
@@ -129,7 +134,7 @@ def compiled_function_groups(groups: list[list[ca.Function]], flags: tuple[str, 
     generated one after the other (CasADi's code generator is not safe to run from several
     threads: concurrent runs gave different sources), the libraries compiled ``workers`` at a time.
     ``external_options`` go to ``casadi.external`` (e.g. ``enable_fd`` for derivatives)."""
-    if os.environ.get("LATENTOC_JIT", "1") == "0":
+    if not jit_enabled():
         return [list(g) for g in groups]
     cc = _compiler()
     if cc is None:

@@ -6,7 +6,7 @@ import pinocchio as pin
 from latentoc.jump.base import base_to_freeflyer
 from latentoc.jump.contact import joint_embedding
 from latentoc.jump.flight import ballistic_base, cumulative_trapezoid_matrix, flight_functions
-from latentoc.jump.problem import setup
+
 from latentoc.spline import BSpline
 
 
@@ -17,8 +17,8 @@ def test_cumulative_trapezoid_is_exact_for_linear_functions():
     assert np.allclose((3 + 2 * tau) @ M, 3 * tau + tau**2)
 
 
-def test_flight_base_has_zero_base_wrench_and_keeps_momentum():
-    js = setup()
+def test_flight_base_has_zero_base_wrench_and_keeps_momentum(jump_setup):
+    js = jump_setup
     ph, tr, gp = js.phases, js.training, js.gpdm
     m = len(js.init["P"])
     sp = BSpline(m, ph.duration)

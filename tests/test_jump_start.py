@@ -2,12 +2,12 @@
 import numpy as np
 import pytest
 
-from latentoc.jump.problem import consistent_start, initial_guess, setup
+from latentoc.jump.problem import consistent_start, initial_guess
 from latentoc.jump.transcription import JumpSettings, build_nlp
 
 
-def test_consistent_start_fits_nonnegative_forces():
-    js = setup()
+def test_consistent_start_fits_nonnegative_forces(jump_setup):
+    js = jump_setup
     s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     names = np.array(nlp.names)
@@ -29,12 +29,12 @@ def test_consistent_start_fits_nonnegative_forces():
     assert np.linalg.norm(d1) < np.linalg.norm(d0)
 
 
-def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
+def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity(jump_setup):
     """The refitted phi_s gives the toe-pinned start the captured takeoff velocity (x, z, pitch)."""
     from latentoc.jump.transcription import anchored_function
     from latentoc.spline import BSpline
 
-    js = setup()
+    js = jump_setup
     s = JumpSettings(base_model="pinned")
     ph = js.phases
     anch = anchored_function(js.sym, js.smap, js.gpdm, js.geom)
@@ -53,10 +53,10 @@ def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity():
 
 
 @pytest.mark.parametrize("base_model", ["spline", "pinned"])
-def test_lifted_jacobian_matches_finite_differences(base_model):
+def test_lifted_jacobian_matches_finite_differences(base_model, jump_setup):
     """The NLP's jac_g (compiled node Jacobians chained through the affine node inputs) against
     central differences of its constraint rows along random directions, for both base models."""
-    js = setup()
+    js = jump_setup
     s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, base_model=base_model)
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     rng = np.random.default_rng(0)
@@ -71,14 +71,14 @@ def test_lifted_jacobian_matches_finite_differences(base_model):
         assert np.max(np.abs(fd - an)) <= 1e-6 * np.max(np.abs(an))
 
 
-def test_time_scaled_export_is_differentiable_in_real_time():
+def test_time_scaled_export_is_differentiable_in_real_time(jump_setup):
     """With time scale k the exported motion lasts k T, and its v and a are the real-time
     derivatives of q (central differences with pinocchio.difference on the 1 kHz grid)."""
     import pinocchio as pin
 
     from latentoc.jump.problem import trajectory
 
-    js = setup()
+    js = jump_setup
     s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     x = consistent_start(nlp, nlp.x0)

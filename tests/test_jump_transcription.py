@@ -4,17 +4,17 @@ import pinocchio as pin
 import pytest
 
 from latentoc.jump.contact import TOE_PAD, foot_points
-from latentoc.jump.problem import consistent_start, initial_guess, setup, trajectory
+from latentoc.jump.problem import consistent_start, initial_guess, trajectory
 from latentoc.jump.transcription import JumpSettings, RowModel, build_nlp, node_rows
 from latentoc.jump.verify import sagittal_contact_wrench
 from latentoc.jump.zmp import G
 
 
-def test_wrench_rows_are_the_cone_of_the_needed_wrench():
+def test_wrench_rows_are_the_cone_of_the_needed_wrench(jump_setup):
     """wrench_rows at stance and landing samples: the needed wrench of numeric pinocchio.rnea
     on the exported 1 kHz motion (verify.sagittal_contact_wrench), its cone and its centre of
     pressure rows, in body weights."""
-    js = setup()
+    js = jump_setup
     s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, base_model="pinned")
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
     x = consistent_start(nlp, nlp.x0)
@@ -52,10 +52,12 @@ def test_wrench_rows_are_the_cone_of_the_needed_wrench():
     assert checked == 6
 
 
-def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support():
-    """With wrench_spacing the NLP gains one sample row set per interval slot, none at a node,
-    and the rearmost support follows the contact schedule (heel, then ball, then toe pad)."""
-    js = setup()
+def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(jump_setup):
+    """With wrench_spacing the NLP gains one sample row set per interval slot, one just inside each
+    unloaded interval of the schedule and one at each spline breakpoint of a contact phase (the
+    splines' accelerations kink there); none at a node, and the rearmost support follows the
+    contact schedule (heel, then ball, then toe pad)."""
+    js = jump_setup
     base = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False)
     dense = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, wrench_spacing=0.02)
     n0, n1 = (build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, st, initial_guess(js, st), js.sym)
@@ -63,15 +65,28 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support():
     names = np.array(n1.names)
     assert not any(k.startswith(("wrench_", "cop_")) for k in n0.names)
     n_samples = int((names == "wrench_normal").sum())
-    grid = n1.meta["grid"]
-    expect = sum(int(np.ceil((b - a) / 0.02 - 1e-9)) - 1 for tn in (grid["stance"], grid["land"])
-                 for a, b in zip(tn[:-1], tn[1:]))
-    ph = js.phases  # plus one sample just inside each unloaded interval of the schedule
-    switches = ph.switch_samples()
+    grid, tw = n1.meta["grid"], n1.meta["wrench_times"]
+    ph = js.phases
+    nodes = np.concatenate([grid["stance"], grid["land"]])
+    assert len(tw) == n_samples and np.all(np.diff(tw) > 0)
+    assert np.min(np.abs(tw[:, None] - nodes[None]), axis=1).min() > 1e-4
+    assert np.all((tw < ph.takeoff) | (tw > ph.touchdown)) and tw.min() > 0 and tw.max() < ph.duration
+    # every interval of 0.02 s spacing gets its even samples (linspace, ends excluded)
+    for tn in (grid["stance"], grid["land"]):
+        for a, b in zip(tn[:-1], tn[1:]):
+            k = int(np.ceil((b - a) / 0.02 - 1e-9))
+            for tk in np.linspace(a, b, k + 1)[1:-1]:
+                assert np.min(np.abs(tw - tk)) < 1e-12
+    switches = ph.switch_samples()  # one sample just inside each unloaded interval of the schedule
     assert len(switches) == 4 and np.allclose(switches, [ph.heel_off + 5e-4, ph.ball_off + 5e-4,
                                                          ph.ball_strike - 5e-4, ph.heel_strike - 5e-4])
     assert not any(ph.loaded(p, np.array([tk]))[0] for tk, p in zip(switches, ("heel", "ball", "ball", "heel")))
-    assert n_samples == expect + 4 and expect > 0
+    sp, sps, spl = n1.meta["splines"]
+    knots = np.concatenate([sp.breakpoints, sps.breakpoints, ph.touchdown + spl.breakpoints])
+    knots = knots[((knots > 0) & (knots < ph.takeoff)) | ((knots > ph.touchdown) & (knots < ph.duration))]
+    assert len(knots) > 10
+    for tk in np.concatenate([switches, knots]):  # at a sample, or at a node already
+        assert np.min(np.abs(np.concatenate([tw, nodes]) - tk)) <= 1e-4
     assert (names == "wrench_friction").sum() == 2 * n_samples and (names == "cop_front").sum() == n_samples
     n_back = sum(int((names == k).sum()) for k in ("cop_heel", "cop_ball", "cop_pad"))
     assert n_back == n_samples and (names == "cop_pad").sum() > 0 and (names == "cop_heel").sum() > 0
@@ -89,7 +104,7 @@ def _spline_base_nlp(js, **kw):
     return s, nlp, parts, trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
 
 
-def test_spline_base_contact_rows_match_numeric_pinocchio():
+def test_spline_base_contact_rows_match_numeric_pinocchio(jump_setup):
     """base_model="spline": at stance and landing nodes the contact rows equal numeric
     pinocchio.rnea minus the point forces' J^T f (body weights) on the exported motion, the joint
     torques, and the toe tip's offset from its ground point and the heel height from forward
@@ -97,7 +112,7 @@ def test_spline_base_contact_rows_match_numeric_pinocchio():
     from latentoc.jump.base import base_to_freeflyer
     from latentoc.jump.contact import joint_embedding, point_forces, point_jacobians
 
-    js = setup()
+    js = jump_setup
     s, nlp, parts, tr = _spline_base_nlp(js)
     mass = sum(i.mass for i in js.model.inertias)
     W = mass * G
@@ -140,14 +155,14 @@ def test_spline_base_contact_rows_match_numeric_pinocchio():
         np.testing.assert_allclose(r[layout["ball_height"]], [ball[2]], atol=1e-9)
 
 
-def test_spline_base_takeoff_and_touchdown_rows_match_numeric_momentum():
+def test_spline_base_takeoff_and_touchdown_rows_match_numeric_momentum(jump_setup):
     """base_model="spline": the takeoff rows are the stance state's COM, COM velocity and
     angular momentum about the COM (pinocchio.computeCentroidalMomentum) minus the flight's
     takeoff variables; the exported flight starts from that state (continuous base)."""
     from latentoc.jump.base import base_to_freeflyer
     from latentoc.jump.contact import joint_embedding
 
-    js = setup()
+    js = jump_setup
     s, nlp, parts, tr = _spline_base_nlp(js)
     mass = sum(i.mass for i in js.model.inertias)
     rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")

@@ -174,6 +174,7 @@ import pinocchio as pin
 
 from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
+from ..solver import jit_enabled
 from ..spline import BSpline
 from .base import base_function
 from .contact import MU, TOE_PAD, FootGeometry, anchor_function, joint_embedding, point_generalized_force, point_forces, \
@@ -203,8 +204,8 @@ class JumpSettings:
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
     base_model: str = "spline"  # "spline": the base's own splines; "pinned": toe-pinned (foot pitch splines)
-    n_base_stance: int = 8  # control points of the (x, z, pitch) base spline in stance ("spline")
-    n_base_land: int = 8  # ... and in the landing
+    n_base_stance: int = 12  # control points of the (x, z, pitch) base spline in stance ("spline"); with 8
+    n_base_land: int = 12  # ... and in the landing; the feasible point nearest the training fit jumped 0.61 m
     foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact ("spline")
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     contact_model: str = "schedule"  # "schedule" (training contact times), "complementarity" or "free"
@@ -515,6 +516,7 @@ def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = ()
               ) -> dict[str, tuple[NodeRows, dict[str, slice]]]:
     """The row blocks of the jump and the ``optional`` ones named (e.g. ``"wrench_rows"``),
     compiled; each block cached per model, GPDM, geometry, limits and mu."""
+    jit = jit and jit_enabled()  # with LATENTOC_JIT=0 the jit and plain blocks are the same
     key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, rm.base_model, jit)
     known = {f.__name__: f for f in OPTIONAL_BLOCKS}
     unknown = [n for n in optional if n not in known]
@@ -553,6 +555,12 @@ def _between(nodes: np.ndarray, spacing: float) -> np.ndarray:
     out = [np.linspace(a, b, max(1, int(np.ceil((b - a) / spacing - 1e-9))) + 1)[1:-1]
            for a, b in zip(nodes[:-1], nodes[1:])]
     return np.concatenate(out) if out else np.zeros(0)
+
+
+def _merge_samples(samples: np.ndarray, extra: np.ndarray, nodes: np.ndarray, gap: float = 1e-4) -> np.ndarray:
+    """``samples`` and ``extra`` sorted, without the extra times within ``gap`` of a node or a sample."""
+    keep = [t for t in extra if np.min(np.abs(np.concatenate([nodes, samples]) - t)) > gap]
+    return np.sort(np.concatenate([samples, np.asarray(keep, float)]))
 
 
 def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]]) -> tuple[list[int], list[str]]:
@@ -644,6 +652,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
 
     # contact nodes: stance (toe at x = 0), landing (toe at x_L)
     Uc = ca.vertcat(anchored_inputs(ts, tl), Lam)
+    tw = np.zeros(0)  # wrench sample times (nominal)
     if s.contact_model not in ("schedule", "complementarity", "free"):
         raise ValueError(f"contact_model must be 'schedule', 'complementarity' or 'free', got {s.contact_model!r}")
     base_rows = ["dynamics"] + (["torque"] if s.torque_limits else []) + \
@@ -658,9 +667,13 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         tws, twl = (_between(tn, s.wrench_spacing) for tn in (ts, tl))
         # and just after each schedule switch, where the support's rear end jumps (heel -> ball):
         # on the 5 ms grid alone the centre of pressure was 1.3 cm behind the ball at heel-off
-        sw = phases.switch_samples()
-        tws = np.sort(np.concatenate([tws, sw[sw < phases.takeoff]]))
-        twl = np.sort(np.concatenate([twl, sw[sw > phases.touchdown]]))
+        # and at the interior breakpoints of the base and latent splines: their accelerations are
+        # piecewise linear with kinks there, so the needed wrench has its extremes there (12 base
+        # control points: fz fell from 0.07 at the samples to 0 at a knot between them)
+        sw = np.concatenate([phases.switch_samples(), sp.breakpoints[1:-1],
+                             sps.breakpoints[1:-1], phases.touchdown + spl.breakpoints[1:-1]])
+        tws = _merge_samples(tws, sw[(sw > 0) & (sw < phases.takeoff)], ts)
+        twl = _merge_samples(twl, sw[(sw > phases.touchdown) & (sw < T)], tl)
         Uw = anchored_inputs(tws, twl)
         tw = np.concatenate([tws, twl])
         heel_w, ball_w = phases.loaded("heel", tw), phases.loaded("ball", tw)
@@ -785,7 +798,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
                                  "pitch_flight", "time_scale"])
     build = time.perf_counter() - t0
     return JumpNLP(solver, x0, lbx, ubx, lbg, ubg, unpack, names, build,
-                   {"grid": grid, "splines": (sp, sps, spl), "mass": mass,
+                   {"grid": grid, "splines": (sp, sps, spl), "mass": mass, "wrench_times": tw,
                     "g_fun": ca.Function("g", [w], [G_]), "jac_fun": jac_g, "sizes": sizes})
 
 
