@@ -3,7 +3,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.jump.contact import TOE_PAD, foot_points
+from latentoc.jump.contact import TOE_PAD, foot_points, point_jacobians
 from latentoc.jump.problem import consistent_start, initial_guess, trajectory
 from latentoc.jump.transcription import JumpSettings, RowModel, build_nlp, node_rows
 from latentoc.jump.verify import sagittal_contact_wrench
@@ -13,7 +13,7 @@ from latentoc.jump.zmp import G
 def test_wrench_rows_are_the_cone_of_the_needed_wrench(jump_setup):
     """wrench_rows at stance and landing samples: the needed wrench of numeric pinocchio.rnea
     on the exported 1 kHz motion (verify.sagittal_contact_wrench), its cone and its centre of
-    pressure rows, in body weights."""
+    pressure rows, in body weights, and the torques of the joints no foot force enters."""
     js = jump_setup
     s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, base_model="pinned")
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
@@ -41,13 +41,28 @@ def test_wrench_rows_are_the_cone_of_the_needed_wrench(jump_setup):
         pin.computeJointJacobians(js.model, d, q)
         pin.framesForwardKinematics(js.model, d, q)
         J = sum(pin.getFrameJacobian(js.model, d, k, pin.LOCAL_WORLD_ALIGNED) for k in ids)
-        fx, _, fz, _, my, _ = sagittal_contact_wrench(J, tau) / (mass * G)
+        wrench = sagittal_contact_wrench(J, tau)
+        fx, _, fz, _, my, _ = wrench / (mass * G)
+        # the same sagittal wrench as point forces, split two ways (heel + toe tip, ball + toe
+        # tip): the torques of the joints no foot force enters do not change, the legs' do
+        Jp = point_jacobians(js.model, d, q, js.geom)
+        split = []
+        for back in (0, 1):
+            C = np.column_stack([Jp[back].T[:, [0, 2]], Jp[2].T[:, 2]])  # (fx, fz) at back, fz at toe
+            f = np.linalg.solve(C[[0, 2, 4]], (J.T @ wrench)[[0, 2, 4]])
+            split.append((tau - C @ f)[6:][rm.active])
+        ff = rm.force_free
+        assert len(ff) == 30 and np.all(J[:, 6 + rm.active[ff]] == 0)
+        assert np.allclose(split[0][ff], split[1][ff], atol=1e-6)
+        assert np.max(np.abs(np.delete(split[0] - split[1], ff))) > 1.0
         heel, ball, toe = foot_points(js.model, d, js.geom).T
         expected = {"wrench_normal": [fz], "wrench_friction": [s.mu * fz - fx, s.mu * fz + fx], "cop_front": [my],
                     "cop_heel": [(toe[0] - heel[0]) * fz - my], "cop_ball": [(toe[0] - ball[0]) * fz - my],
-                    "cop_pad": [TOE_PAD * fz - my]}
+                    "cop_pad": [TOE_PAD * fz - my],
+                    # N m: the joints no foot force enters, numeric RNEA's torques
+                    "torque_free": tau[6:][rm.active[ff]]}
         for name, val in expected.items():
-            assert np.allclose(r[layout[name]], val, atol=1e-6 * max(1.0, abs(fz))), (t, name)
+            assert np.allclose(r[layout[name]], val, atol=1e-6 * max(1.0, abs(fz), np.max(np.abs(val)))), (t, name)
         checked += 1
     assert checked == 6
 
@@ -58,7 +73,7 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(jump_se
     splines' accelerations kink there); none at a node, and the rearmost support follows the
     contact schedule (heel, then ball, then toe pad)."""
     js = jump_setup
-    base = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False)
+    base = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, knot_nodes=True)
     dense = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, wrench_spacing=0.02)
     n0, n1 = (build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, st, initial_guess(js, st), js.sym)
               for st in (base, dense))
@@ -87,10 +102,22 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(jump_se
     assert len(knots) > 10
     for tk in np.concatenate([switches, knots]):  # at a sample, or at a node already
         assert np.min(np.abs(np.concatenate([tw, nodes]) - tk)) <= 1e-4
+    # knot_nodes: the contact grid is the uniform one plus every breakpoint; without, the uniform one
+    uniform = ph.grid(5, 5, 6)
+    for key in ("stance", "flight", "land"):
+        assert np.array_equal(grid[key], uniform[key])
+    g = n0.meta["grid"]
+    c = np.concatenate([g["stance"], g["land"]])
+    assert np.all(np.diff(g["stance"]) > 1e-4) and np.all(np.diff(g["land"]) > 1e-4)
+    assert np.allclose(g["flight"], uniform["flight"])
+    for tk in np.concatenate([uniform["stance"], uniform["land"], knots]):
+        assert np.min(np.abs(c - tk)) <= 1e-4
+    added = len(c) - len(uniform["stance"]) - len(uniform["land"])
+    assert len(knots) - 3 <= added <= len(knots)
     assert (names == "wrench_friction").sum() == 2 * n_samples and (names == "cop_front").sum() == n_samples
     n_back = sum(int((names == k).sum()) for k in ("cop_heel", "cop_ball", "cop_pad"))
     assert n_back == n_samples and (names == "cop_pad").sum() > 0 and (names == "cop_heel").sum() > 0
-    assert len(n1.names) == len(n0.names) + 5 * n_samples
+    assert (names == "torque_free").sum() == 30 * n_samples  # trunk, neck, head and arm joints
     mass = sum(i.mass for i in js.model.inertias)
     with pytest.raises(ValueError, match="unknown optional row blocks"):
         node_rows(RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, 0.4, mass), jit=False, optional=("wrench",))
