@@ -62,8 +62,9 @@ Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): the base 
 every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with the collocated base
 spline it replaced).  Contact phases: the base rows, cone, CoP, torque limits and
 contact schedule hold at nodes every 10 ms (node counts 32/40/62; the flight's torque rows
-also every 10 ms), and the needed wrench's cone and centre of pressure every ``wrench_spacing``
-between them (:func:`wrench_rows`); the point forces act on their own bodies (heel and ball on
+also every 10 ms), and the needed wrench's cone and centre of pressure, and the torques of the
+joints no foot force enters, every ``wrench_spacing`` between them, just inside each unloaded
+interval of the schedule and at every spline breakpoint (:func:`wrench_rows`); the point forces act on their own bodies (heel and ball on
 the foot, toe tip on the toes), as in the torque-limit estimate.  The exported motion is checked
 on 1 kHz by :mod:`.verify`.
 
@@ -162,6 +163,20 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   With a 5 mm foot tolerance (delta 0.16): 0.68 m, friction ratio 0.355, centre of pressure
   -0.3 mm, torque excess 4.6 N m, 672 iterations (335 s): the tolerance trades distance for
   validity.
+* wrench samples also at every spline breakpoint of a contact phase, and 12 + 12 base control
+  points (this version).  The accelerations of the cubic splines are piecewise linear with kinks
+  at the breakpoints, so the needed wrench and the torques peak there: with 12 base control points
+  and samples on the 5 ms grid only, the base fell freely for 3 ms at a knot between two samples
+  (1 kHz normal force -21 N, centre of pressure undefined), at 1.21 m (delta 0.005); with samples
+  at the knots the same solve keeps fz >= 5.6 N, friction ratio 0.42, centre of pressure -3.7 mm.
+  With 8 base control points the feasible point nearest the training fit (phase 1) jumps 0.61 m
+  and phase 2 0.71 m at delta 0.005; with 12, 0.74 m and 1.21 m.  The samples then also bound the
+  torques of the joints no foot force enters (``torque_free``): the upper back's 6.1 N m excess at
+  a base knot went, the largest 1 kHz excess in contact left is the knee's 4.1 N m at the same
+  knot (the legs' torques depend on the split of the wrench between heel, ball and toe tip, which
+  the samples do not have).  Sweep (warm-started, 2 shared cores): 1.207-1.236 m for delta
+  0.005-0.16.  Contact nodes at the knots instead (``knot_nodes``, with force variables): phase 1
+  0.76 m, but phase 2 took 1332 iterations (621 s) to end at 0.72 m, so it is off.
 """
 from __future__ import annotations
 
