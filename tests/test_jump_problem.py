@@ -1,5 +1,8 @@
 """The broad-jump solve layer (latentoc.jump.problem.solve_jump_problem): warm starts."""
+import dataclasses
+
 import numpy as np
+import pytest
 
 import latentoc.jump.problem as jp
 import latentoc.jump.verify
@@ -48,3 +51,16 @@ def test_failed_warm_start_is_solved_again_from_the_training_fit(monkeypatch):
                                            "solve_time_s": 1.0, "distance": 0.4}
     third = jp.solve_jump_problem(problem, tube=0.16).result
     assert calls == [False, True, False, True] and third["warm_start"] and "failed_warm_start" not in third
+
+
+def test_unknown_option_is_refused_by_name():
+    """A typo in [options] is an error naming the key, before any set-up or solve."""
+    from latentoc.solve import SolveError
+
+    problem = load_problem("broad-jump")
+    jp.check_options(problem)  # the packaged problem uses known keys only
+    bad = dataclasses.replace(problem, options={**problem.options, "n_flihgt": 80})
+    with pytest.raises(SolveError, match=r"unknown \[options\] key\(s\) \['n_flihgt'\]"):
+        jp.solve_jump_problem(bad, tube=0.02)
+    with pytest.raises(SolveError, match="n_flihgt"):
+        jp.settings_from_problem(bad, 0.02, None)

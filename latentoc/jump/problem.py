@@ -439,8 +439,27 @@ _SETUP_CACHE: dict = {}
 _WARM: dict = {}  # (setup key, settings without tube) -> (delta, solution vector) of the last success
 
 
+# the ``[options]`` a broad-jump problem file may set (mass, height and learned_dof describe the
+# model and are not read; restitution is reported, the NLP's impact is inelastic)
+OPTIONS = frozenset({
+    "mass", "height", "learned_dof", "friction", "restitution", "training_jumps", "n_stance", "n_flight", "n_land",
+    "torque_margin", "torque_floor", "two_phase", "torque_limits", "polygon", "contact_model", "time_scale",
+    "base_model", "n_base_stance", "n_base_land", "foot_tolerance", "wrench_spacing"})
+
+
+def check_options(problem) -> None:
+    """Refuse ``[options]`` keys a broad-jump problem does not know (a typo would be ignored)."""
+    from ..solve import SolveError
+
+    unknown = sorted(set(problem.options) - OPTIONS)
+    if unknown:
+        raise SolveError(f"problem {problem.name!r}: unknown [options] key(s) {unknown}; "
+                         f"a broad-jump problem knows {sorted(OPTIONS)}")
+
+
 def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSettings:
     """JumpSettings from a :class:`latentoc.problem.Problem` (``[options]`` table)."""
+    check_options(problem)
     o = problem.options
     h = hessian or problem.hessian
     return JumpSettings(tube=float(tube), mu=float(o.get("friction", 0.4)), n_control=int(problem.control_points),
@@ -473,6 +492,7 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     if hessian not in (None, "lbfgs"):
         raise SolveError(f"broad-jump supports hessian 'lbfgs' only (its lifted rows give first derivatives), "
                          f"got {hessian!r}")
+    check_options(problem)
     o = problem.options
     training = "all" if o.get("training_jumps", "one") == "all" else 0
     key = (training, latent_dim or problem.latent_dim, control_points or problem.control_points,
