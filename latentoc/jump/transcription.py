@@ -61,8 +61,8 @@ Objective (Eq. 33): maximise the jump distance x_L - x_0 between the toe tip's g
 Flight: ballistic, integrated from the takeoff state (:mod:`.flight`): the base rows hold at
 every instant (1 kHz residual ~1e-13 body weights, against 0.3-0.5 with the collocated base
 spline it replaced).  Contact phases: the base rows, cone, CoP, torque limits and
-contact schedule hold at nodes every 10 ms (node counts 32/40/62; the flight's torque rows
-also every 10 ms), and the needed wrench's cone and centre of pressure, and the torques of the
+contact schedule hold at nodes every 10 ms (node counts 32/80/62; the flight's torque rows
+every 5 ms), and the needed wrench's cone and centre of pressure, and the torques of the
 joints no foot force enters, every ``wrench_spacing`` between them, just inside each unloaded
 interval of the schedule and at every spline breakpoint (:func:`wrench_rows`); the point forces act on their own bodies (heel and ball on
 the foot, toe tip on the toes), as in the torque-limit estimate.  The exported motion is checked
@@ -174,9 +174,15 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   torques of the joints no foot force enters (``torque_free``): the upper back's 6.1 N m excess at
   a base knot went, the largest 1 kHz excess in contact left is the knee's 4.1 N m at the same
   knot (the legs' torques depend on the split of the wrench between heel, ball and toe tip, which
-  the samples do not have).  Sweep (warm-started, 2 shared cores): 1.207-1.236 m for delta
-  0.005-0.16.  Contact nodes at the knots instead (``knot_nodes``, with force variables): phase 1
-  0.76 m, but phase 2 took 1332 iterations (621 s) to end at 0.72 m, so it is off.
+  the samples do not have).  Sweep (warm-started, 2 shared cores, 40 flight nodes): 1.207-1.236 m
+  for delta 0.005-0.16.  Contact nodes at the knots instead (``knot_nodes``, with force variables): phase 1
+  0.76 m, but phase 2 took 1332 iterations (621 s) to end at 0.72 m, so it is off.  The largest
+  1 kHz excess was then in the flight, between two 10 ms flight nodes: the hip's abduction torque
+  rises by 130 N m within 25 ms and peaked 7.8 N m over its limit 5 ms from the nearest node
+  (delta 0.16, cold); with 80 flight nodes (5 ms): 1.1 N m, 1.229 m instead of 1.236 m, 188 s
+  instead of 146 s (phase 1 464 iterations instead of 384).  Sweep with 80 flight nodes: 1.202 to
+  1.224 m for delta 0.005-0.16, 22-198 s per solve, 1 kHz torque excess 0.5-5.5 N m (in contact),
+  friction ratio <= 0.448, centre of pressure and ZMP >= -3.8 mm.
 """
 from __future__ import annotations
 
@@ -214,7 +220,7 @@ class JumpSettings:
     n_control: int = 21  # paper 11; 11 cannot follow the push-off (see the module doc)
     n_stance: int = 32  # contact nodes every 10 ms: sparser grids let the motion wobble between nodes
     push_off_nodes: tuple[float, int] = (0.0, 0)  # (span s, n): n more stance nodes just before takeoff
-    n_flight: int = 40  # every 10 ms; with 20 the hip torque left its limit by 32 N m between flight nodes
+    n_flight: int = 80  # every 5 ms; the hip torque left its limit between flight nodes by 32 N m with 20, 7.8 with 40
     n_land: int = 62
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
