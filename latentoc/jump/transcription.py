@@ -64,8 +64,9 @@ spline it replaced).  Contact phases: the base rows, cone, CoP, torque limits an
 contact schedule hold at nodes every 10 ms (node counts 32/80/62; the flight's torque rows
 every 5 ms), and the needed wrench's cone and centre of pressure, and the torques of the
 joints no foot force enters, every ``wrench_spacing`` between them, just inside each unloaded
-interval of the schedule and at every spline breakpoint (:func:`wrench_rows`); the point forces act on their own bodies (heel and ball on
-the foot, toe tip on the toes), as in the torque-limit estimate.  The exported motion is checked
+interval of the schedule and at every spline breakpoint (:func:`wrench_rows`); the point
+forces act on their own bodies (heel and ball on the foot, toe tip on the toes), as in the
+torque-limit estimate.  The exported motion is checked
 on 1 kHz by :mod:`.verify`.
 
 Derivatives (:mod:`.lifted`): every row block is a per-node SX Function of inputs affine in
@@ -174,9 +175,10 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   torques of the joints no foot force enters (``torque_free``): the upper back's 6.1 N m excess at
   a base knot went, the largest 1 kHz excess in contact left is the knee's 4.1 N m at the same
   knot (the legs' torques depend on the split of the wrench between heel, ball and toe tip, which
-  the samples do not have).  Sweep (warm-started, 2 shared cores, 40 flight nodes): 1.207-1.236 m
-  for delta 0.005-0.16.  Contact nodes at the knots instead (``knot_nodes``, with force variables): phase 1
-  0.76 m, but phase 2 took 1332 iterations (621 s) to end at 0.72 m, so it is off.  The largest
+  the samples do not have).  Sweep (warm-started, 2 shared cores, 40 flight nodes): 1.207 to
+  1.236 m for delta 0.005-0.16.  Contact nodes at the knots instead (``knot_nodes``, with force
+  variables): phase 1 0.76 m, but phase 2 took 1332 iterations (621 s) to end at 0.72 m, so it
+  is off.  The largest
   1 kHz excess was then in the flight, between two 10 ms flight nodes: the hip's abduction torque
   rises by 130 N m within 25 ms and peaked 7.8 N m over its limit 5 ms from the nearest node
   (delta 0.16, cold); with 80 flight nodes (5 ms): 1.1 N m, 1.229 m instead of 1.236 m, 188 s
@@ -225,8 +227,10 @@ class JumpSettings:
     n_phi_stance: int = 8  # 5 cannot follow the captured stance base (measured, issue 6)
     n_phi_land: int = 6
     base_model: str = "spline"  # "spline": the base's own splines; "pinned": toe-pinned (foot pitch splines)
-    n_base_stance: int = 12  # control points of the (x, z, pitch) base spline in stance ("spline"); with 8
-    n_base_land: int = 12  # ... and in the landing; the feasible point nearest the training fit jumped 0.61 m
+    # control points of the (x, z, pitch) base spline in stance and in the landing ("spline"); with
+    # 8 each the feasible point nearest the training fit jumped 0.61 m (12: 0.74 m)
+    n_base_stance: int = 12
+    n_base_land: int = 12
     foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact ("spline")
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     contact_model: str = "schedule"  # "schedule" (training contact times), "complementarity" or "free"
@@ -768,8 +772,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     row_scale[sel] = np.tile(1.0 / rm.torque_scale[ff], len(sel) // max(len(ff), 1))
     G_ = ca.vertcat(*g) * ca.DM(row_scale)
     J_ = ca.mtimes(ca.diag(ca.DM(row_scale)), ca.vertcat(*jac))
-    bounds = {"dynamics": (0, 0), "torque": None, "torque_free": None, "heel_complementarity": (-np.inf, s.complementarity_eps),
-              "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
+    bounds = {"dynamics": (0, 0), "torque": None, "torque_free": None,
+              "heel_complementarity": (-np.inf, s.complementarity_eps), "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
               "heel_up": (0, np.inf), "toe_position": (-s.foot_tolerance, s.foot_tolerance),
               "heel_height": (-s.contact_tolerance, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
               "takeoff": (0, 0), "pitch_integration": (0, 0), "flight_clearance": (0, np.inf),
