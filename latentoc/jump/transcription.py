@@ -184,7 +184,10 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   (delta 0.16, cold); with 80 flight nodes (5 ms): 1.1 N m, 1.229 m instead of 1.236 m, 188 s
   instead of 146 s (phase 1 464 iterations instead of 384).  Sweep with 80 flight nodes: 1.202 to
   1.224 m for delta 0.005-0.16, 22-198 s per solve, 1 kHz torque excess 0.5-5.5 N m (in contact),
-  friction ratio <= 0.448, centre of pressure and ZMP >= -3.8 mm.
+  friction ratio <= 0.448, centre of pressure and ZMP >= -3.8 mm.  The time scale sits at its
+  bound 1.15 at every delta; with the durations fixed (``time_scale=False``, cold): 0.786 m at
+  delta 0.005 (phase 1 0.415 m) and 1.030 m at 0.16 (tube not binding, max sigma^2 0.074),
+  1 kHz torque excess 2.4 and 0.2 N m, centre of pressure -8.6 and -2.5 mm.
 """
 from __future__ import annotations
 
