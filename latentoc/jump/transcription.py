@@ -650,10 +650,12 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     nbc = 3 if spline_base else 1  # columns of the contact-phase base splines: (x, z, pitch) or phi
     sps = BSpline(s.n_base_stance if spline_base else s.n_phi_stance, phases.takeoff)
     spl = BSpline(s.n_base_land if spline_base else s.n_phi_land, T - phases.touchdown)
-    if s.knot_nodes:  # contact nodes also at the splines' breakpoints in stance and landing
-        knots = np.concatenate([sp.breakpoints, sps.breakpoints, phases.touchdown + spl.breakpoints])
-        grid["stance"] = _merge_samples(grid["stance"], knots[(knots > 0) & (knots < phases.takeoff)], np.zeros(0))
-        grid["land"] = _merge_samples(grid["land"], knots[(knots > phases.touchdown) & (knots < T)], np.zeros(0))
+    # the interior breakpoints of the latent and base splines in stance and landing
+    knots = np.concatenate([sp.breakpoints, sps.breakpoints, phases.touchdown + spl.breakpoints])
+    knots_s, knots_l = knots[(knots > 0) & (knots < phases.takeoff)], knots[(knots > phases.touchdown) & (knots < T)]
+    if s.knot_nodes:  # contact nodes also at the breakpoints
+        grid["stance"] = _merge_samples(grid["stance"], knots_s, np.zeros(0))
+        grid["land"] = _merge_samples(grid["land"], knots_l, np.zeros(0))
     ts, tf, tl = grid["stance"], grid["flight"], grid["land"]
     nS, nF, nL = len(ts), len(tf), len(tl)
     nC = nS + nL
@@ -726,10 +728,9 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         # and at the interior breakpoints of the base and latent splines: their accelerations are
         # piecewise linear with kinks there, so the needed wrench has its extremes there (12 base
         # control points: fz fell from 0.07 at the samples to 0 at a knot between them)
-        sw = np.concatenate([phases.switch_samples(), sp.breakpoints[1:-1],
-                             sps.breakpoints[1:-1], phases.touchdown + spl.breakpoints[1:-1]])
-        tws = _merge_samples(tws, sw[(sw > 0) & (sw < phases.takeoff)], ts)
-        twl = _merge_samples(twl, sw[(sw > phases.touchdown) & (sw < T)], tl)
+        sw = phases.switch_samples()
+        tws = _merge_samples(tws, np.concatenate([sw[sw < phases.takeoff], knots_s]), ts)
+        twl = _merge_samples(twl, np.concatenate([sw[sw > phases.touchdown], knots_l]), tl)
         Uw = anchored_inputs(tws, twl)
         tw = np.concatenate([tws, twl])
         heel_w, ball_w = phases.loaded("heel", tw), phases.loaded("ball", tw)
@@ -767,16 +768,18 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     add("tube_rows", (ca.sparsify(ca.DM(sp.basis(t_tube, 0))) @ Pm).T, [["tube"] for _ in t_tube], affine=True)
 
     names_a = np.array(names)
-    row_scale = np.ones(len(names))  # torque rows in units of each joint's limit range
-    sel = np.where(names_a == "torque")[0]
-    row_scale[sel] = np.tile(1.0 / rm.torque_scale, len(sel) // len(rm.active))
-    ff = rm.force_free
-    sel = np.where(names_a == "torque_free")[0]
-    row_scale[sel] = np.tile(1.0 / rm.torque_scale[ff], len(sel) // max(len(ff), 1))
+    # torque rows (all active joints at the nodes, the force-free ones at the wrench samples),
+    # in units of each joint's limit range
+    torque_joints = {"torque": np.arange(len(rm.active)), "torque_free": rm.force_free}
+    row_scale = np.ones(len(names))
+    for k, pos in torque_joints.items():
+        sel = names_a == k
+        row_scale[sel] = np.tile(1.0 / rm.torque_scale[pos], int(sel.sum()) // max(len(pos), 1))
     G_ = ca.vertcat(*g) * ca.DM(row_scale)
     J_ = ca.mtimes(ca.diag(ca.DM(row_scale)), ca.vertcat(*jac))
     bounds = {"dynamics": (0, 0), "torque": None, "torque_free": None,
-              "heel_complementarity": (-np.inf, s.complementarity_eps), "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
+              "heel_complementarity": (-np.inf, s.complementarity_eps),
+              "ball_complementarity": (-np.inf, s.complementarity_eps), "ball_height": (-s.ball_tolerance, np.inf),
               "heel_up": (0, np.inf), "toe_position": (-s.foot_tolerance, s.foot_tolerance),
               "heel_height": (-s.contact_tolerance, np.inf), "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0),
               "takeoff": (0, 0), "pitch_integration": (0, 0), "flight_clearance": (0, np.inf),
@@ -788,12 +791,10 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     tmin, tmax = limits.tau_min[act] / rm.torque_scale, limits.tau_max[act] / rm.torque_scale
     for k, bnd in bounds.items():
         sel = names_a == k
-        if k == "torque":
-            n = int(sel.sum()) // len(act)
-            lbg[sel], ubg[sel] = np.tile(tmin, n), np.tile(tmax, n)
-        elif k == "torque_free":
-            n = int(sel.sum()) // max(len(ff), 1)
-            lbg[sel], ubg[sel] = np.tile(tmin[ff], n), np.tile(tmax[ff], n)
+        if k in torque_joints:
+            pos = torque_joints[k]
+            n = int(sel.sum()) // max(len(pos), 1)
+            lbg[sel], ubg[sel] = np.tile(tmin[pos], n), np.tile(tmax[pos], n)
         elif sel.any():
             lbg[sel], ubg[sel] = bnd
 
