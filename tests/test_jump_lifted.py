@@ -1,9 +1,9 @@
-"""Lifted row blocks: values and chained Jacobians against CasADi's own derivatives."""
+"""Lifted row blocks: values, chained Jacobians and Hessians against CasADi's own derivatives."""
 import casadi as ca
 import numpy as np
 import pytest
 
-from latentoc.jump.lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
+from latentoc.jump.lifted import NodeRows, compile_node_rows, lifted_hessian, lifted_rows, select_rows
 from latentoc.transcription import affine_map
 
 
@@ -52,3 +52,27 @@ def test_lifted_rows_with_time_scaled_inputs():
     assert np.allclose(g1, g2, atol=1e-12) and np.allclose(J1, J2, atol=1e-10)
     with pytest.raises(ValueError, match="not affine"):
         lifted_rows(block, U, w)
+
+
+@pytest.mark.parametrize("jit", [False, True])
+@pytest.mark.parametrize("affine", [True, False])
+def test_lifted_hessian_matches_casadi_hessian(jit, affine):
+    """The Hessian of lam . g, node Hessians chained through the inputs (and, for time-scaled
+    inputs, the inputs' own curvature), against CasADi's Hessian of the composed rows."""
+    block = compile_node_rows({"toy": _block().with_hessian()}, jit=jit)["toy"]
+    w = ca.MX.sym("w", 4)
+    M = np.random.default_rng(1).standard_normal((3, 4))
+    if affine:
+        U = ca.horzcat(*[ca.mtimes(ca.DM(M * (k + 1)), w) + k for k in range(3)])
+    else:
+        ik = 1 / w[3]
+        U = ca.horzcat(*[ca.vertcat(w[0] + k, ik * w[1], ik ** 2 * w[2] * k) for k in range(3)])
+    lam = ca.MX.sym("lam", 9)
+    H = lifted_hessian(block, U, w, lam, affine)
+    ref = ca.hessian(ca.dot(lam, ca.vec(_block().rows.map(3)(U))), w)[0]
+    x = np.array([0.3, -0.2, 0.5, 0.9])
+    lv = np.random.default_rng(2).standard_normal(9)
+    H1, H2 = (np.array(v) for v in ca.Function("h", [w, lam], [H, ref])(x, lv))
+    assert np.allclose(H1, H1.T) and np.allclose(H1, H2, atol=1e-10)
+    with pytest.raises(ValueError, match="without its Hessian"):
+        lifted_hessian(_block(), U, w, lam, affine)

@@ -6,6 +6,11 @@ decision vector, ``u_k = M_k w + c_k``.  Its rows and their Jacobian are::
     g = vec(F(u_1), ..., F(u_K)),   dg/dw = blockdiag(dF/du(u_k)) M
 
 (with a time scale the inputs are not affine and M is replaced by the sparse dU/dw).
+The exact Hessian of ``l . g`` (:func:`lifted_hessian`) is, with l_k the multipliers of node k::
+
+    sum_k M_k^T H_k M_k + sum_i v_i d2U_i/dw2,   H_k = d2(l_k . F)/du2 (u_k),  v = blockdiag(dF/du)^T l
+
+(the second term only for non-affine inputs).
 
 ``F`` and ``dF/du`` are generated as C and compiled once (:func:`latentoc.solver.compiled_functions`,
 cached on disk), so a constraint Jacobian costs K compiled node Jacobians and one sparse
@@ -14,6 +19,7 @@ per Jacobian of the broad-jump NLP before, see :mod:`.transcription`).
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import casadi as ca
@@ -29,15 +35,29 @@ class NodeRows:
 
     rows: ca.Function
     jacobian: ca.Function
+    hessian: ca.Function | None = None  # (u, l) -> (triu(d2(l . r)/du2), d(l . r)/du), or None
 
     @classmethod
-    def from_expression(cls, name: str, u: ca.SX, r: ca.SX) -> "NodeRows":
+    def from_expression(cls, name: str, u: ca.SX, r: ca.SX, hessian: bool = False) -> "NodeRows":
         """Rows r(u) and (r, dr/du), with common subexpressions merged (about half the
-        instructions of the contact node's Jacobian, and half the C to compile)."""
+        instructions of the contact node's Jacobian, and half the C to compile); with
+        ``hessian`` also the upper triangle of the Hessian of l . r(u) for multipliers l."""
         r1 = ca.cse(r)
         r2, J = ca.cse([r, ca.jacobian(r, u)])
-        return cls(ca.Function(name, [u], [r1], ["u"], ["r"]),
-                   ca.Function(f"{name}_jac", [u], [r2, J], ["u"], ["r", "J"]))
+        block = cls(ca.Function(name, [u], [r1], ["u"], ["r"]),
+                    ca.Function(f"{name}_jac", [u], [r2, J], ["u"], ["r", "J"]))
+        return block.with_hessian() if hessian else block
+
+    def with_hessian(self) -> "NodeRows":
+        """The block with its Hessian Function (self.rows must be an SX Function, not compiled)."""
+        if self.hessian is not None:
+            return self
+        u = ca.SX.sym("u", self.n_in)
+        lam = ca.SX.sym("l", self.n_out)
+        H, grad = ca.hessian(ca.dot(lam, self.rows(u)), u)
+        H, grad = ca.cse([ca.triu(H), grad])
+        return NodeRows(self.rows, self.jacobian,
+                        ca.Function(f"{self.rows.name()}_hess", [u, lam], [H, grad], ["u", "l"], ["H", "grad"]))
 
     @property
     def n_in(self) -> int:
@@ -54,9 +74,31 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True) -> dict[str
         return dict(blocks)
     # finite-difference derivatives only so that CasADi can build its Lagrangian-gradient
     # Function at set-up; Ipopt gets the compiled Jacobians (:func:`lifted_rows`)
-    libs = compiled_function_groups([[b.rows, b.jacobian] for b in blocks.values()],
-                                    external_options={"enable_fd": True})
-    return {name: NodeRows(*fs) for name, fs in zip(blocks, libs)}
+    # the Hessians in libraries of their own: the rows' and Jacobians' libraries stay the same
+    # (cached) whether a block has its Hessian or not
+    groups = [[b.rows, b.jacobian] for b in blocks.values()]
+    hess = [name for name, b in blocks.items() if b.hessian is not None]
+    libs = compiled_function_groups(groups + [[blocks[n].hessian] for n in hess], external_options={"enable_fd": True})
+    out = {name: NodeRows(*fs) for name, fs in zip(blocks, libs)}
+    for name, (h,) in zip(hess, libs[len(groups):]):
+        out[name] = NodeRows(out[name].rows, out[name].jacobian, h)
+    return out
+
+
+def threads() -> int:
+    """Threads for the per-node evaluations of compiled blocks: ``$LATENTOC_THREADS``, else the
+    number of CPUs.  (2 threads on 2 cores: 1.9x on a compiled test function; in CasADi's
+    virtual machine threads were slower, so uncompiled blocks run serially.)"""
+    n = os.environ.get("LATENTOC_THREADS")
+    return max(1, int(n) if n else (os.cpu_count() or 1))
+
+
+def node_map(f: ca.Function, K: int) -> ca.Function:
+    """``f`` mapped over K nodes, on :func:`threads` threads when f is compiled."""
+    n = threads()
+    if K > 1 and n > 1 and f.class_name() == "External":
+        return f.map(K, "thread", min(n, K))
+    return f.map(K)
 
 
 def lifted_rows(block: NodeRows, U: ca.MX, w: ca.MX, affine: bool = True) -> tuple[ca.MX, ca.MX]:
@@ -68,15 +110,38 @@ def lifted_rows(block: NodeRows, U: ca.MX, w: ca.MX, affine: bool = True) -> tup
     nu, K = U.shape
     if nu != block.n_in:
         raise ValueError(f"block {block.rows.name()} takes {block.n_in} inputs, U has {nu} rows")
-    if affine:
-        M, c = affine_map(U, w)
-        Uw = ca.reshape(ca.mtimes(M, w) + c, nu, K)
-    else:
-        M, Uw = ca.jacobian(ca.vec(U), w), U
-    g = ca.vec(block.rows.map(K)(Uw))
-    J = block.jacobian.map(K)(Uw)[1]  # n_out x (nu K)
+    Uw, M = _inputs(U, w, affine)
+    g = ca.vec(node_map(block.rows, K)(Uw))
+    J = node_map(block.jacobian, K)(Uw)[1]  # n_out x (nu K)
     D = ca.diagcat(*ca.horzsplit(J, nu)) if K > 1 else J
     return g, ca.mtimes(D, M)
+
+
+def _inputs(U: ca.MX, w: ca.MX, affine: bool) -> tuple[ca.MX, ca.MX]:
+    """(U as M w + c, M) for affine inputs, else (U, dU/dw)."""
+    if affine:
+        M, c = affine_map(U, w)
+        return ca.reshape(ca.mtimes(M, w) + c, *U.shape), M
+    return U, ca.jacobian(ca.vec(U), w)
+
+
+def lifted_hessian(block: NodeRows, U: ca.MX, w: ca.MX, lam: ca.MX, affine: bool = True) -> ca.MX:
+    """The (symmetric, full) Hessian over w of ``lam . g`` for g = :func:`lifted_rows`'s rows
+    (``lam``: n_out K multipliers, node-major; module doc)."""
+    if block.hessian is None:
+        raise ValueError(f"block {block.rows.name()} was built without its Hessian")
+    nu, K = U.shape
+    Uw, M = _inputs(U, w, affine)
+    L = ca.reshape(lam, block.n_out, K)
+    Hn, V = node_map(block.hessian, K)(Uw, L)  # n_in x (n_in K) upper triangles; n_in x K gradients
+    D = ca.diagcat(*ca.horzsplit(Hn, nu)) if K > 1 else Hn
+    D = D + D.T - ca.diag(ca.diag(D))
+    H = ca.mtimes(M.T, ca.mtimes(D, M))
+    if not affine:  # curvature of the inputs: sum_i v_i d2U_i/dw2, v = d(l . F)/du per node
+        vs = ca.MX.sym("v", nu * K)
+        curv = ca.Function("input_curvature", [w, vs], [ca.hessian(ca.dot(vs, ca.vec(U)), w)[0]])
+        H = H + curv(w, ca.vec(V))
+    return H
 
 
 def select_rows(g: ca.MX, jac: ca.MX, rows: np.ndarray) -> tuple[ca.MX, ca.MX]:

@@ -71,7 +71,10 @@ on 1 kHz by :mod:`.verify`.
 
 Derivatives (:mod:`.lifted`): every row block is a per-node SX Function of inputs affine in
 the decision vector (contact node, flight node, takeoff, touchdown, pitch rate, tube),
-compiled with its Jacobian to C; Ipopt gets jac_g = blockdiag(dF/du) M and an L-BFGS Hessian.
+compiled with its Jacobian to C; Ipopt gets jac_g = blockdiag(dF/du) M and an L-BFGS Hessian,
+or with ``hessian="exact"`` the compiled node Hessians chained the same way
+(:func:`.lifted.lifted_hessian`; the time scale's curvature and the pitch integral k A pd by the
+product rule).  Compiled blocks are evaluated node by node on :func:`.lifted.threads` threads.
 
 Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
 
@@ -206,7 +209,7 @@ from .base import base_function
 from .contact import MU, TOE_PAD, FootGeometry, anchor_function, joint_embedding, point_generalized_force, point_forces, \
     points_function, toe_wrench
 from .flight import GRAVITY, ballistic_base, cumulative_trapezoid_matrix, flight_functions
-from .lifted import NodeRows, compile_node_rows, lifted_rows, select_rows
+from .lifted import NodeRows, compile_node_rows, lifted_hessian, lifted_rows, select_rows
 from .phases import Phases
 from .support_polygon import symbolic_rows
 from .torque_limits import TrainingDynamics
@@ -214,6 +217,7 @@ from .training import RIGHT_TOE, TOE
 from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]
+JUMP_HESSIANS = ("limited-memory", "exact")
 
 
 @dataclass
@@ -249,7 +253,7 @@ class JumpSettings:
     knot_nodes: bool = False
     max_iter: int = 400
     tol: float = 1e-5
-    hessian: str = "limited-memory"  # the only one: the lifted rows give first derivatives only
+    hessian: str = "limited-memory"  # or "exact": compiled Hessians of the row blocks (:func:`.lifted.lifted_hessian`)
     print_level: int = 0
     torque_limits: bool = True
     polygon: bool = True
@@ -558,12 +562,13 @@ ROW_BLOCKS = (contact_rows, flight_rows, takeoff_rows, touchdown_rows, pitch_rat
 OPTIONAL_BLOCKS = (wrench_rows,)  # built (and compiled) only when asked for
 
 
-def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = ()
+def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = (), hessian: bool = False
               ) -> dict[str, tuple[NodeRows, dict[str, slice]]]:
     """The row blocks of the jump and the ``optional`` ones named (e.g. ``"wrench_rows"``),
-    compiled; each block cached per model, GPDM, geometry, limits and mu."""
+    compiled, with their Hessians if ``hessian``; each block cached per model, GPDM, geometry,
+    limits, mu and whether it has its Hessian."""
     jit = jit and jit_enabled()  # with LATENTOC_JIT=0 the jit and plain blocks are the same
-    key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, rm.base_model, jit)
+    key = (id(rm.sym), id(rm.gpdm), id(rm.geom), id(rm.limits), rm.mu, rm.base_model, jit, hessian)
     known = {f.__name__: f for f in OPTIONAL_BLOCKS}
     unknown = [n for n in optional if n not in known]
     if unknown:
@@ -573,6 +578,8 @@ def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = ()
     missing = [f for f in wanted if f.__name__ not in cached]
     if missing:
         raw = {f.__name__: f(rm) for f in missing}
+        if hessian:
+            raw = {k: (v[0].with_hessian(), v[1]) for k, v in raw.items()}
         compiled = compile_node_rows({k: v[0] for k, v in raw.items()}, jit=jit)
         cached.update({k: (compiled[k], raw[k][1]) for k in raw})
     return {f.__name__: cached[f.__name__] for f in wanted}
@@ -632,12 +639,13 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     """Assemble the NLP; ``init`` holds initial guesses (P, phi_s, phi_l, x_L, lam)."""
     t0 = time.perf_counter()
     s = settings
-    if s.hessian != "limited-memory":
-        raise ValueError(f"the broad jump supports the limited-memory Hessian only, got {s.hessian!r}")
+    if s.hessian not in JUMP_HESSIANS:
+        raise ValueError(f"hessian must be one of {JUMP_HESSIANS}, got {s.hessian!r}")
+    exact = s.hessian == "exact"
     sym = sym or SymbolicModel(model)
     mass = float(sum(i.mass for i in model.inertias))
     rm = RowModel(sym, smap, gpdm, geom, limits, s.mu, mass, s.base_model)
-    blocks = node_rows(rm, jit=s.jit, optional=("wrench_rows",) if s.wrench_spacing > 0 else ())
+    blocks = node_rows(rm, jit=s.jit, optional=("wrench_rows",) if s.wrench_spacing > 0 else (), hessian=exact)
     dlat = gpdm.latent_dim
     grid = phases.grid(s.n_stance, s.n_flight, s.n_land, s.push_off_nodes)
     T = phases.duration
@@ -685,6 +693,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         return _time_scaled(_spline_rows(sp, Pm, t), dlat, ik)  # (x, xd, xdd) in real time: 3d x K
 
     g, jac, names = [], [], []
+    terms = []  # (block, U, affine, selected rows of the block, first NLP row) for the exact Hessian
 
     def add(block: str, U: ca.MX, per_node: list[list[str]], affine: bool = affine):
         nr, layout = blocks[block]
@@ -692,6 +701,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         idx, nm = _layout_indices(layout, nr.n_out, U.shape[1], per_node)
         if idx:
             gi, ji = select_rows(gb, jb, np.array(idx))
+            terms.append((nr, U, affine, idx, len(names)))
             g.append(gi)
             jac.append(ji)
             names.extend(nm)
@@ -745,8 +755,9 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         [["takeoff"]])
     nsub = max(1, int(s.flight_substeps))
     tau_fine = np.linspace(0.0, tau_f[-1], (nF - 1) * nsub + 1)
-    gpd, jpd = lifted_rows(blocks["pitch_rate_rows"][0], ca.vertcat(lat_rows(phases.takeoff + tau_fine),
-                                                                     ca.repmat(L_to, 1, len(tau_fine))), w, affine)
+    Upd = ca.vertcat(lat_rows(phases.takeoff + tau_fine), ca.repmat(L_to, 1, len(tau_fine)))
+    gpd, jpd = lifted_rows(blocks["pitch_rate_rows"][0], Upd, w, affine)
+    pitch_row0 = len(names)
     A = ca.DM(cumulative_trapezoid_matrix(tau_fine)[:, ::nsub].T[1:])  # (nF - 1) x fine: int_0^tau_k pd ds
     B = ca.horzcat(-ca.DM.ones(nF - 1, 1), ca.DM.eye(nF - 1))  # p_k - p_0
     lin = ca.mtimes(B, pf)
@@ -852,10 +863,26 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     jac_g = ca.Function("jac_g", [w, p0], [G_, J_], ["x", "p"], ["g", "jac_g_x"])
     nlp = {"x": w, "p": pw, "f": f, "g": G_}
     opts = {"ipopt.max_iter": s.max_iter, "ipopt.tol": s.tol, "ipopt.print_level": s.print_level,
-            "print_time": False, "ipopt.hessian_approximation": "limited-memory",
-            "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 10,
+            "print_time": False, "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 10,
             "ipopt.constr_viol_tol": 1e-6, "ipopt.mu_strategy": "adaptive", "jac_g": jac_g,
-            "calc_lam_p": False, "calc_lam_x": False}  # the compiled rows have no second derivatives
+            "calc_lam_p": False, "calc_lam_x": False}  # CasADi must not differentiate the compiled rows
+    if exact:
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(names))
+        H = lam_f * ca.hessian(f, w)[0]
+        for nr, U, aff, idx, row0 in terms:  # each block's multipliers, in its own (unscaled) rows
+            rows = np.arange(row0, row0 + len(idx))
+            S = ca.DM.triplet(list(idx), rows.tolist(), row_scale[rows].tolist(), nr.n_out * U.shape[1], len(names))
+            H = H + lifted_hessian(nr, U, w, ca.mtimes(S, lam_g), aff)
+        # pitch integration lin - k A pd: d2/dw2 of -k mu . pd with mu = A^T lam
+        mu_pd = ca.mtimes(A.T, lam_g[pitch_row0:pitch_row0 + nF - 1])
+        grad_pd, dk = ca.mtimes(jpd.T, mu_pd), ca.jacobian(kt, w).T
+        H = H - kt * lifted_hessian(blocks["pitch_rate_rows"][0], Upd, w, mu_pd, affine) \
+            - ca.mtimes(dk, grad_pd.T) - ca.mtimes(grad_pd, dk.T)
+        hess_lag = ca.Function("hess_lag", [w, pw, lam_f, lam_g], [ca.triu(H)],
+                               ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+        opts["hess_lag"] = hess_lag
+    else:
+        opts["ipopt.hessian_approximation"] = "limited-memory"
     solver = ca.nlpsol("broad_jump", "ipopt", nlp, opts)
     unpack = ca.Function("unpack", [w], [Pm, cs, cl, xL, Lam, Limp, c_to, cd_to, L_to, pf, kt],
                          ["w"], ["P", "phi_s", "phi_l", "x_L", "lam", "lam_impact", "c_to", "cd_to", "L_to",
@@ -863,7 +890,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     build = time.perf_counter() - t0
     return JumpNLP(solver, x0, lbx, ubx, lbg, ubg, unpack, names, build,
                    {"grid": grid, "splines": (sp, sps, spl), "mass": mass, "wrench_times": tw,
-                    "g_fun": ca.Function("g", [w], [G_]), "jac_fun": jac_g, "sizes": sizes})
+                    "g_fun": ca.Function("g", [w], [G_]), "jac_fun": jac_g, "sizes": sizes,
+                    "hess_fun": opts.get("hess_lag"), "f_fun": ca.Function("f", [w, pw], [f])})
 
 
 def flight_guess(rm: RowModel, sp: BSpline, sps: BSpline, P: np.ndarray, base_s: np.ndarray, takeoff: float,
