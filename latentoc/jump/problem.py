@@ -489,9 +489,8 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
 
     if method != "latent":
         raise SolveError(f"broad-jump supports method 'latent' only, got {method!r}")
-    if hessian not in (None, "lbfgs"):
-        raise SolveError(f"broad-jump supports hessian 'lbfgs' only (its lifted rows give first derivatives), "
-                         f"got {hessian!r}")
+    if hessian not in (None, "lbfgs", "exact"):
+        raise SolveError(f"broad-jump supports hessian 'exact' or 'lbfgs', got {hessian!r}")
     check_options(problem)
     o = problem.options
     training = "all" if o.get("training_jumps", "one") == "all" else 0
