@@ -76,3 +76,25 @@ def test_lifted_hessian_matches_casadi_hessian(jit, affine):
     assert np.allclose(H1, H1.T) and np.allclose(H1, H2, atol=1e-10)
     with pytest.raises(ValueError, match="without its Hessian"):
         lifted_hessian(_block(), U, w, lam, affine)
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_compiled_blocks_on_threads_match_casadi(threads, monkeypatch):
+    """Compiled blocks (forced on, also under LATENTOC_JIT=0) mapped serially or on 2 threads:
+    rows, Jacobian and Hessian equal CasADi's derivatives of the composed rows."""
+    monkeypatch.setenv("LATENTOC_JIT", "1")
+    monkeypatch.setenv("LATENTOC_THREADS", threads)
+    block = compile_node_rows({"toy": _block().with_hessian()})["toy"]
+    if block.rows.class_name() != "External":
+        pytest.skip("no C compiler: the blocks stay uncompiled")
+    w = ca.MX.sym("w", 4)
+    M = np.random.default_rng(3).standard_normal((3, 4))
+    U = ca.horzcat(*[ca.mtimes(ca.DM(M * (k + 1)), w) + k for k in range(5)])
+    lam = ca.MX.sym("lam", 15)
+    g, J = lifted_rows(block, U, w)
+    H = lifted_hessian(block, U, w, lam)
+    ref = ca.vec(_block().rows.map(5)(U))
+    f = ca.Function("f", [w, lam], [g, J, H, ref, ca.jacobian(ref, w), ca.hessian(ca.dot(lam, ref), w)[0]])
+    g1, J1, H1, g2, J2, H2 = (np.array(v) for v in f(np.array([0.3, -0.2, 0.5, 0.9]),
+                                                        np.random.default_rng(4).standard_normal(15)))
+    assert np.allclose(g1, g2, atol=1e-12) and np.allclose(J1, J2, atol=1e-10) and np.allclose(H1, H2, atol=1e-10)
