@@ -98,3 +98,13 @@ def test_compiled_blocks_on_threads_match_casadi(threads, monkeypatch):
     g1, J1, H1, g2, J2, H2 = (np.array(v) for v in f(np.array([0.3, -0.2, 0.5, 0.9]),
                                                         np.random.default_rng(4).standard_normal(15)))
     assert np.allclose(g1, g2, atol=1e-12) and np.allclose(J1, J2, atol=1e-10) and np.allclose(H1, H2, atol=1e-10)
+
+
+def test_bad_thread_count_is_refused_by_name(monkeypatch):
+    from latentoc.jump.lifted import threads
+
+    monkeypatch.setenv("LATENTOC_THREADS", "two")
+    with pytest.raises(ValueError, match="LATENTOC_THREADS must be a positive integer, got 'two'"):
+        threads()
+    monkeypatch.setenv("LATENTOC_THREADS", "3")
+    assert threads() == 3

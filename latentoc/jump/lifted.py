@@ -90,7 +90,11 @@ def threads() -> int:
     number of CPUs.  (2 threads on 2 cores: 1.9x on a compiled test function; in CasADi's
     virtual machine threads were slower, so uncompiled blocks run serially.)"""
     n = os.environ.get("LATENTOC_THREADS")
-    return max(1, int(n) if n else (os.cpu_count() or 1))
+    if not n:
+        return max(1, os.cpu_count() or 1)
+    if not n.strip().isdigit() or int(n) < 1:
+        raise ValueError(f"LATENTOC_THREADS must be a positive integer, got {n!r}")
+    return int(n)
 
 
 def node_map(f: ca.Function, K: int) -> ca.Function:
