@@ -68,12 +68,12 @@ def test_lifted_hessian_matches_casadi_hessian(jit, affine):
         ik = 1 / w[3]
         U = ca.horzcat(*[ca.vertcat(w[0] + k, ik * w[1], ik ** 2 * w[2] * k) for k in range(3)])
     lam = ca.MX.sym("lam", 9)
-    H = lifted_hessian(block, U, w, lam, affine)
-    ref = ca.hessian(ca.dot(lam, ca.vec(_block().rows.map(3)(U))), w)[0]
+    H, grad = lifted_hessian(block, U, w, lam, affine)
+    ref, ref_grad = ca.hessian(ca.dot(lam, ca.vec(_block().rows.map(3)(U))), w)
     x = np.array([0.3, -0.2, 0.5, 0.9])
     lv = np.random.default_rng(2).standard_normal(9)
-    H1, H2 = (np.array(v) for v in ca.Function("h", [w, lam], [H, ref])(x, lv))
-    assert np.allclose(H1, H1.T) and np.allclose(H1, H2, atol=1e-10)
+    H1, H2, g1, g2 = (np.array(v) for v in ca.Function("h", [w, lam], [H, ref, grad, ref_grad])(x, lv))
+    assert np.allclose(H1, H1.T) and np.allclose(H1, H2, atol=1e-10) and np.allclose(g1, g2, atol=1e-10)
     with pytest.raises(ValueError, match="without its Hessian"):
         lifted_hessian(_block(), U, w, lam, affine)
 
@@ -92,7 +92,7 @@ def test_compiled_blocks_on_threads_match_casadi(threads, monkeypatch):
     U = ca.horzcat(*[ca.mtimes(ca.DM(M * (k + 1)), w) + k for k in range(5)])
     lam = ca.MX.sym("lam", 15)
     g, J = lifted_rows(block, U, w)
-    H = lifted_hessian(block, U, w, lam)
+    H = lifted_hessian(block, U, w, lam)[0]
     ref = ca.vec(_block().rows.map(5)(U))
     f = ca.Function("f", [w, lam], [g, J, H, ref, ca.jacobian(ref, w), ca.hessian(ca.dot(lam, ref), w)[0]])
     g1, J1, H1, g2, J2, H2 = (np.array(v) for v in f(np.array([0.3, -0.2, 0.5, 0.9]),

@@ -129,9 +129,10 @@ def _inputs(U: ca.MX, w: ca.MX, affine: bool) -> tuple[ca.MX, ca.MX]:
     return U, ca.jacobian(ca.vec(U), w)
 
 
-def lifted_hessian(block: NodeRows, U: ca.MX, w: ca.MX, lam: ca.MX, affine: bool = True) -> ca.MX:
+def lifted_hessian(block: NodeRows, U: ca.MX, w: ca.MX, lam: ca.MX, affine: bool = True) -> tuple[ca.MX, ca.MX]:
     """The (symmetric, full) Hessian over w of ``lam . g`` for g = :func:`lifted_rows`'s rows
-    (``lam``: n_out K multipliers, node-major; module doc)."""
+    (``lam``: n_out K multipliers, node-major; module doc), and its gradient over w,
+    (dU/dw)^T v, from the same node evaluations."""
     if block.hessian is None:
         raise ValueError(f"block {block.rows.name()} was built without its Hessian")
     nu, K = U.shape
@@ -145,7 +146,7 @@ def lifted_hessian(block: NodeRows, U: ca.MX, w: ca.MX, lam: ca.MX, affine: bool
         vs = ca.MX.sym("v", nu * K)
         curv = ca.Function("input_curvature", [w, vs], [ca.hessian(ca.dot(vs, ca.vec(U)), w)[0]])
         H = H + curv(w, ca.vec(V))
-    return H
+    return H, ca.mtimes(M.T, ca.vec(V))
 
 
 def select_rows(g: ca.MX, jac: ca.MX, rows: np.ndarray) -> tuple[ca.MX, ca.MX]:

@@ -882,12 +882,12 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         for nr, U, aff, idx, row0 in terms:  # each block's multipliers, in its own (unscaled) rows
             rows = np.arange(row0, row0 + len(idx))
             S = ca.DM.triplet(list(idx), rows.tolist(), row_scale[rows].tolist(), nr.n_out * U.shape[1], len(names))
-            H = H + lifted_hessian(nr, U, w, ca.mtimes(S, lam_g), aff)
+            H = H + lifted_hessian(nr, U, w, ca.mtimes(S, lam_g), aff)[0]
         # pitch integration lin - k A pd: d2/dw2 of -k mu . pd with mu = A^T lam
         mu_pd = ca.mtimes(A.T, lam_g[pitch_row0:pitch_row0 + nF - 1])
-        grad_pd, dk = ca.mtimes(jpd.T, mu_pd), ca.jacobian(kt, w).T
-        H = H - kt * lifted_hessian(blocks["pitch_rate_rows"][0], Upd, w, mu_pd, affine) \
-            - ca.mtimes(dk, grad_pd.T) - ca.mtimes(grad_pd, dk.T)
+        H_pd, grad_pd = lifted_hessian(blocks["pitch_rate_rows"][0], Upd, w, mu_pd, affine)
+        dk = ca.jacobian(kt, w).T
+        H = H - kt * H_pd - ca.mtimes(dk, grad_pd.T) - ca.mtimes(grad_pd, dk.T)
         hess_lag = ca.Function("hess_lag", [w, pw, lam_f, lam_g], [ca.triu(H)],
                                ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
         opts["hess_lag"] = hess_lag
