@@ -37,7 +37,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-__all__ = ["NLPResult", "build_solver", "solve_nlp", "HESSIANS", "compiled_functions", "jit_cache_dir", "jit_enabled"]
+__all__ = ["NLPResult", "build_solver", "solve_nlp", "HESSIANS", "compiled_functions", "compiled_libraries", "jit_cache_dir",
+           "jit_compiler", "jit_enabled", "ipopt_solver", "load_ipopt"]
 
 HESSIANS = ("exact", "lbfgs")
 
@@ -80,6 +81,36 @@ def build_solver(nlp: dict, *, hessian: str = "exact", max_iter: int = 300, tol:
     if hessian == "lbfgs":
         ipopt["hessian_approximation"] = "limited-memory"
     options = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "expand": bool(expand), **derivatives}
+    return ipopt_solver(name, nlp, options)
+
+
+_IPOPT_LOADED = False
+
+
+def load_ipopt() -> None:
+    """Load CasADi's Ipopt plugin, with the OpenBLAS it brings (under MUMPS) on one thread
+    unless ``$OPENBLAS_NUM_THREADS`` is set.  OpenBLAS reads the variable once, when the
+    plugin's libraries are loaded; numpy's own OpenBLAS, loaded before, keeps its threads.
+    Its spinning worker threads competed with the threaded node evaluations: broad jump,
+    phase 2 at delta 0.005 on 2 cores, 103 s (45.6 s of it system time) with the default,
+    82 s (3.3 s) with one thread, same 140 iterations (issue 6)."""
+    global _IPOPT_LOADED
+    if _IPOPT_LOADED:
+        return
+    unset = "OPENBLAS_NUM_THREADS" not in os.environ
+    if unset:
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    try:
+        ca.load_nlpsol("ipopt")
+    finally:
+        if unset:
+            del os.environ["OPENBLAS_NUM_THREADS"]
+    _IPOPT_LOADED = True
+
+
+def ipopt_solver(name: str, nlp: dict, options: dict) -> ca.Function:
+    """``casadi.nlpsol(name, "ipopt", nlp, options)`` after :func:`load_ipopt`."""
+    load_ipopt()
     return ca.nlpsol(name, "ipopt", nlp, options)
 
 
@@ -108,7 +139,8 @@ def jit_cache_dir() -> Path:
     return Path(base) / "latentoc" / "jit"
 
 
-def _compiler() -> str | None:
+def jit_compiler() -> str | None:
+    """The C compiler of the JIT ($CC, else gcc, else cc), or None."""
     cc = os.environ.get("CC") or "gcc"
     return shutil.which(cc) or shutil.which("cc")
 
@@ -134,12 +166,21 @@ def compiled_function_groups(groups: list[list[ca.Function]], flags: tuple[str, 
     generated one after the other (CasADi's code generator is not safe to run from several
     threads: concurrent runs gave different sources), the libraries compiled ``workers`` at a time.
     ``external_options`` go to ``casadi.external`` (e.g. ``enable_fd`` for derivatives)."""
+    libs = compiled_libraries(groups, flags, workers)
+    opts = dict(external_options or {})
+    return [list(g) if lib is None else [ca.external(f.name(), str(lib), opts) for f in g] for g, lib in zip(groups, libs)]
+
+
+def compiled_libraries(groups: list[list[ca.Function]], flags: tuple[str, ...] = JIT_FLAGS,
+                       workers: int = 2) -> list[Path | None]:
+    """The shared library of each group (:func:`compiled_function_groups`), or None for a group
+    that is not compiled (``LATENTOC_JIT=0``, no compiler, or the compiler failed: warning)."""
     if not jit_enabled():
-        return [list(g) for g in groups]
-    cc = _compiler()
+        return [None] * len(groups)
+    cc = jit_compiler()
     if cc is None:
-        warnings.warn("no C compiler found (set CC): evaluating the NLP Functions without JIT", stacklevel=2)
-        return [list(g) for g in groups]
+        warnings.warn("no C compiler found (set CC): evaluating the NLP Functions without JIT", stacklevel=3)
+        return [None] * len(groups)
     sources = []
     for functions in groups:
         gen = ca.CodeGenerator("latentoc_jit.c", {"with_header": False})
@@ -169,6 +210,4 @@ def compiled_function_groups(groups: list[list[ca.Function]], flags: tuple[str, 
         return lib
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        libs = list(pool.map(build, sources))  # the compiler runs outside Python: threads suffice
-    opts = dict(external_options or {})
-    return [list(g) if lib is None else [ca.external(f.name(), str(lib), opts) for f in g] for g, lib in zip(groups, libs)]
+        return list(pool.map(build, sources))  # the compiler runs outside Python: threads suffice

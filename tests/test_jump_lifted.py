@@ -108,3 +108,37 @@ def test_bad_thread_count_is_refused_by_name(monkeypatch):
         threads()
     monkeypatch.setenv("LATENTOC_THREADS", "3")
     assert threads() == 3
+
+
+def test_compiled_blocks_are_found_from_their_rows(tmp_path, monkeypatch):
+    """A second build of the same rows loads the compiled libraries from the on-disk index
+    without building the derivatives (they would raise here), with the same values; other
+    rows get their own entry, and an entry whose library is gone is rebuilt."""
+    monkeypatch.setenv("LATENTOC_JIT", "1")
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    first = compile_node_rows({"toy": _block()}, hessian=True)["toy"]
+    if first.rows.class_name() != "External":
+        pytest.skip("no C compiler: the blocks stay uncompiled")
+    u = ca.SX.sym("u", 3)
+    lazy = NodeRows.from_expression("toy", u, ca.vertcat(ca.sin(u[0]) * u[1], u[2] ** 3 + u[0] * u[1], ca.exp(u[2])),
+                                    lazy=True)
+    assert lazy.jacobian is None
+
+    def refuse(self):
+        raise AssertionError("derivatives built although the block is indexed")
+
+    with monkeypatch.context() as m:
+        m.setattr(NodeRows, "with_jacobian", refuse)
+        m.setattr(NodeRows, "with_hessian", refuse)
+        again = compile_node_rows({"toy": lazy}, hessian=True)["toy"]
+    x, lv = np.array([0.3, -0.2, 0.5]), np.array([1.0, -2.0, 0.5])
+    ref = _block().with_hessian()
+    for a, b in [(again.jacobian(x), ref.jacobian(x)), (again.hessian(x, lv), ref.hessian(x, lv))]:
+        assert all(np.allclose(np.array(p), np.array(q), atol=1e-12) for p, q in zip(a, b))
+    other = NodeRows.from_expression("toy", u, ca.vertcat(ca.sin(u[0]) * u[1], u[2] ** 3, ca.exp(u[2])), lazy=True)
+    assert np.isclose(float(compile_node_rows({"toy": other})["toy"].rows(x)[1]), 0.125)
+    assert len(list(tmp_path.glob("nr_*.json"))) == 2  # toy with its Hessian, the variant without
+    for lib in tmp_path.glob("lc_*.so"):
+        lib.unlink()
+    rebuilt = compile_node_rows({"toy": _block()}, hessian=True)["toy"]
+    assert np.allclose(np.array(rebuilt.hessian(x, lv)[0]), np.array(ref.hessian(x, lv)[0]), atol=1e-12)

@@ -1,5 +1,6 @@
 """Ipopt wrapper on a small NLP with a known optimum."""
 
+import os
 import casadi as ca
 import numpy as np
 import pytest
@@ -106,12 +107,12 @@ def test_compiled_functions_fall_back_without_compiler(tmp_path, monkeypatch):
     from latentoc import solver
     monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
     monkeypatch.delenv("LATENTOC_JIT", raising=False)
-    monkeypatch.setattr(solver, "_compiler", lambda: None)
+    monkeypatch.setattr(solver, "jit_compiler", lambda: None)
     fns = _small_functions()
     with pytest.warns(UserWarning, match="no C compiler"):
         out = solver.compiled_functions(fns)
     assert out == fns and not list(tmp_path.iterdir())
-    monkeypatch.setattr(solver, "_compiler", lambda: "/bin/false")  # a "compiler" that fails
+    monkeypatch.setattr(solver, "jit_compiler", lambda: "/bin/false")  # a "compiler" that fails
     with pytest.warns(UserWarning, match="compiling the NLP Functions failed"):
         assert solver.compiled_functions(fns) == fns
     assert not list(tmp_path.glob("lc_*.so")) and not list(tmp_path.glob(".build-*"))
@@ -131,3 +132,25 @@ def test_recommended_ipopt_options_are_passed():
     with pytest.raises(RuntimeError):
         s = build_solver(nlp)
         solve_nlp(s, np.array([-1.0, 1.0]), -np.inf * np.ones(2), np.inf * np.ones(2), [-np.inf], [1.0])
+
+
+def test_ipopt_loads_its_blas_on_one_thread():
+    """Loading the Ipopt plugin starts no OpenBLAS worker threads (counted in /proc in a fresh
+    process), leaves $OPENBLAS_NUM_THREADS unset, and a value the user sets is obeyed."""
+    import subprocess
+    import sys
+
+    if not os.path.isdir("/proc/self/task"):
+        pytest.skip("needs /proc to count threads")
+    code = ("import os, numpy, casadi\n"
+            "n = len(os.listdir('/proc/self/task'))\n"
+            "from latentoc.solver import load_ipopt\n"
+            "load_ipopt()\n"
+            "print(len(os.listdir('/proc/self/task')) - n, os.environ.get('OPENBLAS_NUM_THREADS'))\n")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["0", "None"]
+    if (os.cpu_count() or 1) > 1:  # the count does see OpenBLAS's workers when they are asked for
+        out = subprocess.run([sys.executable, "-c", code], env={**env, "OPENBLAS_NUM_THREADS": "2"},
+                             capture_output=True, text=True, check=True).stdout
+        assert out.split() == ["1", "2"]

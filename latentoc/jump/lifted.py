@@ -19,34 +19,50 @@ per Jacobian of the broad-jump NLP before, see :mod:`.transcription`).
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from ..solver import compiled_function_groups
+from ..solver import JIT_FLAGS, jit_compiler, compiled_libraries, jit_cache_dir, jit_enabled
 from ..transcription import affine_map
 
 
 @dataclass
 class NodeRows:
-    """A per-node row Function F(u) (SX, one vector input, one vector output) and its Jacobian."""
+    """A per-node row Function F(u) (SX, one vector input, one vector output) and its Jacobian
+    (and Hessian); ``jacobian`` is None until :meth:`with_jacobian` (a block built with
+    ``lazy=True``, so that a compiled block found on disk needs no symbolic derivatives)."""
 
     rows: ca.Function
-    jacobian: ca.Function
+    jacobian: ca.Function | None = None
     hessian: ca.Function | None = None  # (u, l) -> (triu(d2(l . r)/du2), d(l . r)/du), or None
+    expression: tuple[ca.SX, ca.SX] | None = field(default=None, repr=False)  # (u, r) the rows came from
 
     @classmethod
-    def from_expression(cls, name: str, u: ca.SX, r: ca.SX, hessian: bool = False) -> "NodeRows":
+    def from_expression(cls, name: str, u: ca.SX, r: ca.SX, hessian: bool = False, lazy: bool = False) -> "NodeRows":
         """Rows r(u) and (r, dr/du), with common subexpressions merged (about half the
         instructions of the contact node's Jacobian, and half the C to compile); with
-        ``hessian`` also the upper triangle of the Hessian of l . r(u) for multipliers l."""
-        r1 = ca.cse(r)
-        r2, J = ca.cse([r, ca.jacobian(r, u)])
-        block = cls(ca.Function(name, [u], [r1], ["u"], ["r"]),
-                    ca.Function(f"{name}_jac", [u], [r2, J], ["u"], ["r", "J"]))
+        ``hessian`` also the upper triangle of the Hessian of l . r(u) for multipliers l;
+        ``lazy``: the rows only, derivatives on demand."""
+        block = cls(ca.Function(name, [u], [ca.cse(r)], ["u"], ["r"]), expression=(u, r))
+        if lazy:
+            return block
+        block = block.with_jacobian()
         return block.with_hessian() if hessian else block
+
+    def with_jacobian(self) -> "NodeRows":
+        """The block with its Jacobian Function (r, dr/du)."""
+        if self.jacobian is not None:
+            return self
+        u, r = self.expression
+        r2, J = ca.cse([r, ca.jacobian(r, u)])
+        jac = ca.Function(f"{self.rows.name()}_jac", [u], [r2, J], ["u"], ["r", "J"])
+        return NodeRows(self.rows, jac, self.hessian, self.expression)
 
     def with_hessian(self) -> "NodeRows":
         """The block with its Hessian Function (self.rows must be an SX Function, not compiled)."""
@@ -56,8 +72,8 @@ class NodeRows:
         lam = ca.SX.sym("l", self.n_out)
         H, grad = ca.hessian(ca.dot(lam, self.rows(u)), u)
         H, grad = ca.cse([ca.triu(H), grad])
-        return NodeRows(self.rows, self.jacobian,
-                        ca.Function(f"{self.rows.name()}_hess", [u, lam], [H, grad], ["u", "l"], ["H", "grad"]))
+        hess = ca.Function(f"{self.rows.name()}_hess", [u, lam], [H, grad], ["u", "l"], ["H", "grad"])
+        return NodeRows(self.rows, self.jacobian, hess, self.expression)
 
     @property
     def n_in(self) -> int:
@@ -68,21 +84,83 @@ class NodeRows:
         return self.rows.nnz_out(0)
 
 
-def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True) -> dict[str, NodeRows]:
-    """The blocks with their Functions compiled to C (one library per block, two compiled at a time)."""
-    if not jit:
-        return dict(blocks)
-    # finite-difference derivatives only so that CasADi can build its Lagrangian-gradient
-    # Function at set-up; Ipopt gets the compiled Jacobians (:func:`lifted_rows`)
-    # the Hessians in libraries of their own: the rows' and Jacobians' libraries stay the same
-    # (cached) whether a block has its Hessian or not
-    groups = [[b.rows, b.jacobian] for b in blocks.values()]
-    hess = [name for name, b in blocks.items() if b.hessian is not None]
-    libs = compiled_function_groups(groups + [[blocks[n].hessian] for n in hess], external_options={"enable_fd": True})
-    out = {name: NodeRows(*fs) for name, fs in zip(blocks, libs)}
-    for name, (h,) in zip(hess, libs[len(groups):]):
-        out[name] = NodeRows(out[name].rows, out[name].jacobian, h)
-    return out
+# bump when the derivative Functions made from the same rows change (:meth:`NodeRows.with_jacobian`,
+# :meth:`NodeRows.with_hessian`): the on-disk index of compiled blocks is keyed by it
+DERIVATIVES_VERSION = "1"
+
+
+def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True, hessian: bool = False) -> dict[str, NodeRows]:
+    """The blocks with their Jacobians (and with ``hessian``, or where a block has one, their
+    Hessians) compiled to C: rows and Jacobian in one library, the Hessian in another (so the
+    first stays the same, and cached, whether a block has its Hessian or not), two compiled at
+    a time.
+
+    Compiled blocks are also indexed on disk by a hash of their rows' serialized SX (with the
+    compiler flags, CasADi's version and :data:`DERIVATIVES_VERSION`): a later process finds
+    the libraries from the rows alone, without building the derivatives' SX or their C
+    (issue 6: 90 s of the broad jump's build).  Without JIT the derivatives are built as SX."""
+    want = {name: hessian or b.hessian is not None for name, b in blocks.items()}
+    if not (jit and jit_enabled()) or jit_compiler() is None:
+        out = {name: b.with_jacobian() for name, b in blocks.items()}
+        out = {name: b.with_hessian() if want[name] else b for name, b in out.items()}
+        return out
+    out, missing = {}, {}
+    for name, b in blocks.items():
+        found = _indexed(b, want[name])
+        if found is None:
+            missing[name] = b
+        else:
+            out[name] = found
+    if missing:
+        built = {name: b.with_jacobian() for name, b in missing.items()}
+        built = {name: b.with_hessian() if want[name] else b for name, b in built.items()}
+        groups = [[b.rows, b.jacobian] for b in built.values()]
+        hess = [name for name, b in built.items() if b.hessian is not None]
+        libs = compiled_libraries(groups + [[built[n].hessian] for n in hess])
+        libs_of = {name: [lib] for name, lib in zip(built, libs)}
+        for name, lib in zip(hess, libs[len(groups):]):
+            libs_of[name].append(lib)
+        for name, b in built.items():
+            if any(lib is None for lib in libs_of[name]):  # the compiler failed (warned): SX
+                out[name] = b
+                continue
+            _write_index(b, want[name], libs_of[name])
+            out[name] = _indexed(b, want[name])
+    return {name: out[name] for name in blocks}
+
+
+# finite-difference derivatives only so that CasADi can build its Lagrangian-gradient Function at
+# set-up; Ipopt gets the compiled Jacobians (:func:`lifted_rows`)
+_EXTERNAL_OPTIONS = {"enable_fd": True}
+
+
+def _index_file(block: NodeRows, hessian: bool) -> Path:
+    key = "\0".join([block.rows.serialize(), str(hessian), DERIVATIVES_VERSION, ca.__version__, str(jit_compiler()),
+                      *JIT_FLAGS])
+    return jit_cache_dir() / f"nr_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
+
+
+def _indexed(block: NodeRows, hessian: bool) -> NodeRows | None:
+    """The compiled block from the on-disk index, or None."""
+    path = _index_file(block, hessian)
+    try:
+        entry = json.loads(path.read_text())
+        libs = [Path(p) for p in entry["libraries"]]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if not all(lib.exists() for lib in libs) or len(libs) != 1 + hessian:
+        return None
+    name = block.rows.name()
+    rows, jac = (ca.external(n, str(libs[0]), _EXTERNAL_OPTIONS) for n in (name, f"{name}_jac"))
+    hess = ca.external(f"{name}_hess", str(libs[1]), _EXTERNAL_OPTIONS) if hessian else None
+    return NodeRows(rows, jac, hess)
+
+
+def _write_index(block: NodeRows, hessian: bool, libs: list[Path]) -> None:
+    path = _index_file(block, hessian)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}")
+    tmp.write_text(json.dumps({"block": block.rows.name(), "libraries": [str(p) for p in libs]}))
+    os.replace(tmp, path)  # atomic: readers see no entry or a complete one
 
 
 def threads() -> int:

@@ -211,7 +211,7 @@ import pinocchio as pin
 
 from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
-from ..solver import jit_enabled
+from ..solver import ipopt_solver, jit_enabled
 from ..spline import BSpline
 from .base import base_function
 from .contact import MU, TOE_PAD, FootGeometry, anchor_function, joint_embedding, point_generalized_force, point_forces, \
@@ -483,7 +483,7 @@ def _node_rows(name: str, u: ca.SX, parts: dict) -> tuple[NodeRows, dict[str, sl
     for k, e in parts.items():
         layout[k] = slice(off, off + e.numel())
         off += e.numel()
-    return NodeRows.from_expression(name, u, ca.vertcat(*[ca.vec(e) for e in parts.values()])), layout
+    return NodeRows.from_expression(name, u, ca.vertcat(*[ca.vec(e) for e in parts.values()]), lazy=True), layout
 
 
 def _flight_base(rm: RowModel, x, xd, xdd, p, L, c_to, cd_to, tt):
@@ -588,9 +588,7 @@ def node_rows(rm: RowModel, jit: bool = True, optional: tuple[str, ...] = (), he
     missing = [f for f in wanted if f.__name__ not in cached]
     if missing:
         raw = {f.__name__: f(rm) for f in missing}
-        if hessian:
-            raw = {k: (v[0].with_hessian(), v[1]) for k, v in raw.items()}
-        compiled = compile_node_rows({k: v[0] for k, v in raw.items()}, jit=jit)
+        compiled = compile_node_rows({k: v[0] for k, v in raw.items()}, jit=jit, hessian=hessian)
         cached.update({k: (compiled[k], raw[k][1]) for k in raw})
     return {f.__name__: cached[f.__name__] for f in wanted}
 
@@ -893,7 +891,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
         opts["hess_lag"] = hess_lag
     else:
         opts["ipopt.hessian_approximation"] = "limited-memory"
-    solver = ca.nlpsol("broad_jump", "ipopt", nlp, opts)
+    solver = ipopt_solver("broad_jump", nlp, opts)
     unpack = ca.Function("unpack", [w], [Pm, cs, cl, xL, Lam, Limp, c_to, cd_to, L_to, pf, kt],
                          ["w"], ["P", "phi_s", "phi_l", "x_L", "lam", "lam_impact", "c_to", "cd_to", "L_to",
                                  "pitch_flight", "time_scale"])
