@@ -142,3 +142,20 @@ def test_compiled_blocks_are_found_from_their_rows(tmp_path, monkeypatch):
         lib.unlink()
     rebuilt = compile_node_rows({"toy": _block()}, hessian=True)["toy"]
     assert np.allclose(np.array(rebuilt.hessian(x, lv)[0]), np.array(ref.hessian(x, lv)[0]), atol=1e-12)
+
+
+def test_blocks_stay_sx_with_a_warning_without_compiler(tmp_path, monkeypatch):
+    import latentoc.solver as solver
+
+    monkeypatch.setenv("LATENTOC_JIT", "1")
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(solver, "jit_compiler", lambda: None)
+    u = ca.SX.sym("u", 3)
+    lazy = NodeRows.from_expression("toy", u, ca.vertcat(ca.sin(u[0]) * u[1], u[2] ** 3 + u[0] * u[1], ca.exp(u[2])),
+                                    lazy=True)
+    with pytest.warns(UserWarning, match="no C compiler"):
+        block = compile_node_rows({"toy": lazy}, hessian=True)["toy"]
+    assert block.rows.class_name() == "SXFunction" and block.hessian is not None
+    x = np.array([0.3, -0.2, 0.5])
+    assert np.allclose(np.array(block.jacobian(x)[1]), np.array(_block().jacobian(x)[1]))
+    assert not list(tmp_path.glob("nr_*.json"))

@@ -12,8 +12,8 @@ The exact Hessian of ``l . g`` (:func:`lifted_hessian`) is, with l_k the multipl
 
 (the second term only for non-affine inputs).
 
-``F`` and ``dF/du`` are generated as C and compiled once (:func:`latentoc.solver.compiled_functions`,
-cached on disk), so a constraint Jacobian costs K compiled node Jacobians and one sparse
+``F`` and ``dF/du`` are generated as C and compiled once (:func:`latentoc.solver.compiled_libraries`,
+cached on disk, and found again from the rows alone, :func:`compile_node_rows`), so a constraint Jacobian costs K compiled node Jacobians and one sparse
 product instead of CasADi's directional derivatives through the whole graph (issue 6: 2.3 s
 per Jacobian of the broad-jump NLP before, see :mod:`.transcription`).
 """
@@ -28,7 +28,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from ..solver import JIT_FLAGS, jit_compiler, compiled_libraries, jit_cache_dir, jit_enabled
+from ..solver import JIT_FLAGS, compiled_libraries, jit_cache_dir, jit_compiler, jit_enabled
 from ..transcription import affine_map
 
 
@@ -100,13 +100,13 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True, hessian: bo
     the libraries from the rows alone, without building the derivatives' SX or their C
     (issue 6: 90 s of the broad jump's build).  Without JIT the derivatives are built as SX."""
     want = {name: hessian or b.hessian is not None for name, b in blocks.items()}
-    if not (jit and jit_enabled()) or jit_compiler() is None:
+    if not (jit and jit_enabled()):
         out = {name: b.with_jacobian() for name, b in blocks.items()}
-        out = {name: b.with_hessian() if want[name] else b for name, b in out.items()}
-        return out
+        return {name: b.with_hessian() if want[name] else b for name, b in out.items()}
+    index = {name: _index_file(b, want[name]) for name, b in blocks.items()}
     out, missing = {}, {}
     for name, b in blocks.items():
-        found = _indexed(b, want[name])
+        found = _indexed(index[name], b.rows.name(), want[name])
         if found is None:
             missing[name] = b
         else:
@@ -121,11 +121,11 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True, hessian: bo
         for name, lib in zip(hess, libs[len(groups):]):
             libs_of[name].append(lib)
         for name, b in built.items():
-            if any(lib is None for lib in libs_of[name]):  # the compiler failed (warned): SX
+            if any(lib is None for lib in libs_of[name]):  # no compiler, or it failed (warned): SX
                 out[name] = b
                 continue
-            _write_index(b, want[name], libs_of[name])
-            out[name] = _indexed(b, want[name])
+            _write_index(index[name], b.rows.name(), libs_of[name])
+            out[name] = _indexed(index[name], b.rows.name(), want[name])
     return {name: out[name] for name in blocks}
 
 
@@ -140,26 +140,24 @@ def _index_file(block: NodeRows, hessian: bool) -> Path:
     return jit_cache_dir() / f"nr_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
 
 
-def _indexed(block: NodeRows, hessian: bool) -> NodeRows | None:
-    """The compiled block from the on-disk index, or None."""
-    path = _index_file(block, hessian)
+def _indexed(path: Path, name: str, hessian: bool) -> NodeRows | None:
+    """The compiled block ``name`` from its index entry ``path``, or None (no entry, or a
+    library of it is gone)."""
     try:
         entry = json.loads(path.read_text())
         libs = [Path(p) for p in entry["libraries"]]
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    if not all(lib.exists() for lib in libs) or len(libs) != 1 + hessian:
+    if len(libs) != 1 + hessian or not all(lib.exists() for lib in libs):
         return None
-    name = block.rows.name()
     rows, jac = (ca.external(n, str(libs[0]), _EXTERNAL_OPTIONS) for n in (name, f"{name}_jac"))
     hess = ca.external(f"{name}_hess", str(libs[1]), _EXTERNAL_OPTIONS) if hessian else None
     return NodeRows(rows, jac, hess)
 
 
-def _write_index(block: NodeRows, hessian: bool, libs: list[Path]) -> None:
-    path = _index_file(block, hessian)
+def _write_index(path: Path, block: str, libs: list[Path]) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}")
-    tmp.write_text(json.dumps({"block": block.rows.name(), "libraries": [str(p) for p in libs]}))
+    tmp.write_text(json.dumps({"block": block, "libraries": [str(p) for p in libs]}))
     os.replace(tmp, path)  # atomic: readers see no entry or a complete one
 
 
