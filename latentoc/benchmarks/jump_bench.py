@@ -10,12 +10,21 @@ constraint, gradient and Hessian evaluation.  Run: ``python -m latentoc.benchmar
 Measured (2 shared cores, compiled blocks on 2 threads, the packaged problem: fixed phase
 durations, exact Hessian):
 
-* ``--tubes 0.005``: build 94 s (the symbolic Hessians, once per process), then 114 s cold
-  (phase 1 38 iterations in 16 s, phase 2 140 in 98 s).  Per iteration: constraint Jacobian
-  147 ms, Hessian 324 ms, the rest of Ipopt (KKT factorisation and solves) about 0.1 s.  The
-  flight block's Jacobian alone takes about 50 ms (80 nodes, 425k instructions each), its
-  Hessian 110 ms (1.15M).  Warm (``sweep broad-jump``, each tube from the previous optimum):
-  46-92 s per solve, 70-131 iterations.
+* ``--tubes 0.005``: build 8.7 s (the compiled blocks found from their rows, :func:`latentoc.jump.lifted.compile_node_rows`;
+  94 s when a process builds the symbolic Jacobians and Hessians), then 88 s cold (phase 1 38
+  iterations in 14 s, phase 2 128 in 74 s).  Per iteration: constraint Jacobian 102 ms, Hessian
+  265 ms, the rest of Ipopt (KKT factorisations, with inertia corrections, and solves) about
+  0.19 s.  Before Ipopt's OpenBLAS ran on one thread (:func:`latentoc.solver.load_ipopt`): 114 s
+  (Jacobian 147 ms, Hessian 324 ms, 45 s of system time in phase 2).  The flight block's
+  Jacobian alone takes about 50 ms (80 nodes, 425k instructions each), its Hessian 110 ms (1.15M).
+  Warm (``sweep broad-jump``, each tube from the previous optimum): 36-53 s per solve, 63-102
+  iterations.
+* Tried and not kept, phase 2 from the same phase-1 point at delta 0.005 (140 iterations, 82 s):
+  ``mu_init`` 1e-3 to 1e-5 with small bound pushes, 140-143 iterations; MUMPS without scaling, or
+  with scaling 8, 141 and 132 iterations in 80 s; SPRAL as the linear solver, 135 iterations in
+  182 s (127 s in the linear solver); phase 1 with the wrench samples (one NLP), 79 + 123
+  iterations in 137 s against 38 + 140 in 127 s; gcc ``-O2``/``-O3`` for the tube Hessian (timed
+  beside another solve): 244/154 us per node against 144 with ``-O1``, and 6.5x/4.8x its compile time.
 * Warm starts with the previous optimum's multipliers too (``warm_start_init_point``, mu_init
   1e-6 or 1e-3 monotone): 86 and 91 iterations from delta 0.005 to 0.01, against 99 from the
   point alone, so the point alone is used.

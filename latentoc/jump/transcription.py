@@ -199,6 +199,11 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   solve (70-140 iterations), the tube binding at every delta, 1 kHz torque excess 0.07-2.0 N m,
   friction ratio <= 0.475, centre of pressure and ZMP >= -3.9 mm.  Per iteration the Hessian
   takes 0.32 s and the constraint Jacobian 0.15 s.
+* Ipopt's OpenBLAS on one thread (its spinning workers had competed with the threaded node
+  evaluations, :func:`latentoc.solver.load_ipopt`) and the compiled blocks found on disk from their
+  rows (build 94 s -> 8.7 s, :func:`.lifted.compile_node_rows`), this version: sweep 88, 52, 53,
+  36, 46, 53 s per solve (63-128 iterations), the same distances (1.006-1.035 m); per iteration
+  the Hessian 0.26 s, the Jacobian 0.10 s, the rest of Ipopt 0.19 s.
 """
 from __future__ import annotations
 
