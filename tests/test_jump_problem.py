@@ -10,7 +10,7 @@ from latentoc.problem import load_problem
 
 
 class _GP:
-    latent_dim, beta = 3, np.ones(3)
+    latent_dim, beta, X = 3, np.ones(3), np.zeros((5, 3))
 
     def tube_size(self):
         return 1e-4
@@ -64,3 +64,30 @@ def test_unknown_option_is_refused_by_name():
         jp.solve_jump_problem(bad, tube=0.02)
     with pytest.raises(SolveError, match="n_flihgt"):
         jp.settings_from_problem(bad, 0.02, None)
+
+
+@pytest.mark.parametrize("training, stride, n_points", [(0, 3, 53), ("all", 10, 160)])
+def test_training_stride_learns_every_kth_frame(training, stride, n_points):
+    """The GPDM learns every stride-th frame of each jump: its mean at the learned latent points
+    gives back those captured frames (to a few % of their range), and the Eq. 30 tube of the
+    ten jumps holds every jump's latent points."""
+    from latentoc.jump.training import training_jumps
+
+    js = jp.setup(training, stride=stride)
+    gp = js.gpdm
+    Y = np.vstack([t.Y[::stride] for t in training_jumps(training)])
+    assert gp.X.shape == (n_points, 3) and len(gp.latent_trajectories()) == (10 if training == "all" else 1)
+    assert np.max(np.abs(gp.mean(gp.X) - Y)) < 0.03 * np.ptp(Y)
+    tube = gp.tube_size()
+    assert all(np.max(gp.variance(T)) <= tube for T in gp.latent_trajectories())
+    assert js.init["P"].shape == (21, 3) and np.all(np.isfinite(js.init["P"]))
+
+
+@pytest.mark.parametrize("stride", [0, 2.5, 100, "2"])
+def test_bad_training_stride_is_refused_by_name(stride):
+    from latentoc.solve import SolveError
+
+    problem = load_problem("broad-jump")
+    bad = dataclasses.replace(problem, options={**problem.options, "training_stride": stride})
+    with pytest.raises(SolveError, match=r"training_stride: training stride must be an integer from 1 to 39"):
+        jp.solve_jump_problem(bad, tube=0.02)

@@ -57,8 +57,14 @@ PATH_SMOOTHING = 1e-3  # weight of int ||x"||^2 dt in the initial latent path fi
 
 def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, torque_margin: float = 0.1,
           gpdm_settings: GPDMSettings | None = None, path_smoothing: float = PATH_SMOOTHING,
-          torque_floor: float = 5.0) -> JumpSetup:
+          torque_floor: float = 5.0, stride: int = 1) -> JumpSetup:
     """Everything the NLP needs, from the training data.
+
+    ``stride``: the GPDM learns every ``stride``-th captured frame (120 Hz) of each jump.  The
+    node rows' size grows with the number of training points (the GP mean's derivatives over
+    all of them at every node), so the ten jumps of ``training="all"`` (1570 frames; learning
+    138 s, Eq. 30 tube 0.112) need one: their node functions would be 10x the single jump's.
+    Phases, torque limits and the start guess come from the first jump at the full rate.
 
     The initial latent path is a B-spline fit of the learned latent points with the penalty
     ``path_smoothing * int ||x''||^2 dt``.  The plain fit wiggles at the knot spacing (latent
@@ -71,7 +77,10 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     model, smap = jump_model()
     trs = training_jumps(training)
     tr = trs[0]
-    gp = learn_gpdm([t.Y for t in trs] if len(trs) > 1 else tr.Y, gpdm_settings or GPDMSettings(latent_dim=latent_dim))
+    if not (isinstance(stride, (int, np.integer)) and not isinstance(stride, bool) and 1 <= stride <= len(tr.t) // 4):
+        raise ValueError(f"training stride must be an integer from 1 to {len(tr.t) // 4} (frames), got {stride!r}")
+    Ys = [t.Y[::stride] for t in trs]
+    gp = learn_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = FootGeometry.from_standing(model, tr.Q[0])
     phases = training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
@@ -79,7 +88,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     limits = estimate_training_dynamics(model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded,
                                         floor=torque_floor)
     X = gp.latent_trajectories()[0]
-    P = initial_latent_path(BSpline(n_control, tr.duration), tr.t, X, path_smoothing,
+    P = initial_latent_path(BSpline(n_control, tr.duration), tr.t[::stride], X, path_smoothing,
                             np.array([phases.takeoff, phases.touchdown]))
     phi, bx = _foot_pitch(model, tr.Q, geom)
     td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
@@ -444,7 +453,7 @@ _WARM: dict = {}  # (setup key, settings without tube) -> (delta, solution vecto
 OPTIONS = frozenset({
     "mass", "height", "learned_dof", "friction", "restitution", "training_jumps", "n_stance", "n_flight", "n_land",
     "torque_margin", "torque_floor", "two_phase", "torque_limits", "polygon", "contact_model", "time_scale",
-    "base_model", "n_base_stance", "n_base_land", "foot_tolerance", "wrench_spacing"})
+    "base_model", "n_base_stance", "n_base_land", "foot_tolerance", "wrench_spacing", "training_stride"})
 
 
 def check_options(problem) -> None:
@@ -494,11 +503,15 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     check_options(problem)
     o = problem.options
     training = "all" if o.get("training_jumps", "one") == "all" else 0
+    stride = o.get("training_stride", 1)
     key = (training, latent_dim or problem.latent_dim, control_points or problem.control_points,
-           float(o.get("torque_margin", 0.1)), float(o.get("torque_floor", 5.0)))
+           float(o.get("torque_margin", 0.1)), float(o.get("torque_floor", 5.0)), stride)
     t0 = time.perf_counter()
     if key not in _SETUP_CACHE:
-        _SETUP_CACHE[key] = setup(training, key[1], key[2], key[3], torque_floor=key[4])
+        try:
+            _SETUP_CACHE[key] = setup(training, key[1], key[2], key[3], torque_floor=key[4], stride=stride)
+        except ValueError as exc:
+            raise SolveError(f"problem {problem.name!r}, [options] training_stride: {exc}") from None
     js = _SETUP_CACHE[key]
     gpdm_time = time.perf_counter() - t0
     spec = problem.tube if tube is None else tube
@@ -523,6 +536,8 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     checks = verify(js.model, traj, s.mu)
     r = out["result"]
     r.update({"problem": problem.name, "kind": problem.kind, "method": "latent", "tube_spec": spec,
+              "training_jumps": o.get("training_jumps", "one"), "training_stride": stride,
+              "training_points": int(js.gpdm.X.shape[0]),
               "tube_training": js.gpdm.tube_size(), "tube_relative": delta * js.gpdm.beta[2],
               "latent_dim": js.gpdm.latent_dim, "control_points": s.n_control, "gpdm_time_s": gpdm_time,
               "cost_initial": r["distance_initial"], "cost": r["distance"],
