@@ -101,8 +101,7 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True, hessian: bo
     (issue 6: 90 s of the broad jump's build).  Without JIT the derivatives are built as SX."""
     want = {name: hessian or b.hessian is not None for name, b in blocks.items()}
     if not (jit and jit_enabled()):
-        out = {name: b.with_jacobian() for name, b in blocks.items()}
-        return {name: b.with_hessian() if want[name] else b for name, b in out.items()}
+        return {name: _with_derivatives(b, want[name]) for name, b in blocks.items()}
     index = {name: _index_file(b, want[name]) for name, b in blocks.items()}
     out, missing = {}, {}
     for name, b in blocks.items():
@@ -112,8 +111,7 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True, hessian: bo
         else:
             out[name] = found
     if missing:
-        built = {name: b.with_jacobian() for name, b in missing.items()}
-        built = {name: b.with_hessian() if want[name] else b for name, b in built.items()}
+        built = {name: _with_derivatives(b, want[name]) for name, b in missing.items()}
         groups = [[b.rows, b.jacobian] for b in built.values()]
         hess = [name for name, b in built.items() if b.hessian is not None]
         libs = compiled_libraries(groups + [[built[n].hessian] for n in hess])
@@ -125,8 +123,13 @@ def compile_node_rows(blocks: dict[str, NodeRows], jit: bool = True, hessian: bo
                 out[name] = b
                 continue
             _write_index(index[name], b.rows.name(), libs_of[name])
-            out[name] = _indexed(index[name], b.rows.name(), want[name])
+            out[name] = _loaded(libs_of[name], b.rows.name())
     return {name: out[name] for name in blocks}
+
+
+def _with_derivatives(block: NodeRows, hessian: bool) -> NodeRows:
+    block = block.with_jacobian()
+    return block.with_hessian() if hessian else block
 
 
 # finite-difference derivatives only so that CasADi can build its Lagrangian-gradient Function at
@@ -150,8 +153,13 @@ def _indexed(path: Path, name: str, hessian: bool) -> NodeRows | None:
         return None
     if len(libs) != 1 + hessian or not all(lib.exists() for lib in libs):
         return None
+    return _loaded(libs, name)
+
+
+def _loaded(libs: list[Path], name: str) -> NodeRows:
+    """Block ``name`` from its libraries: rows and Jacobian, and the Hessian if there is a second."""
     rows, jac = (ca.external(n, str(libs[0]), _EXTERNAL_OPTIONS) for n in (name, f"{name}_jac"))
-    hess = ca.external(f"{name}_hess", str(libs[1]), _EXTERNAL_OPTIONS) if hessian else None
+    hess = ca.external(f"{name}_hess", str(libs[1]), _EXTERNAL_OPTIONS) if len(libs) > 1 else None
     return NodeRows(rows, jac, hess)
 
 
