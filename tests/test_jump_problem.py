@@ -20,26 +20,30 @@ class _JS:
     gpdm, model = _GP(), None
 
 
-def _fake_solve(calls, succeed):
-    def solve(js, s, x0=None):
+def _fake_solve(calls, succeed, starts=None):
+    def solve(js, s, x0=None, duals=None):
         warm = x0 is not None
         calls.append(warm)
+        if starts is not None:
+            starts.append((x0, duals))
         ok = succeed(warm, s.tube)
         return {"result": {"success": ok, "warm_start": warm, "status": "Solve_Succeeded" if ok else "Maximum_Iterations_Exceeded",
                            "iterations": 7, "solve_time_s": 1.0, "distance": 0.8 if ok else 0.4,
                            "distance_initial": 0.73},
-                "w": np.full(3, s.tube), "nlp": type("N", (), {"x0": np.zeros(3), "lbg": np.zeros(2)})()}
+                "w": np.full(3, s.tube), "duals": (np.full(2, -s.tube), np.full(3, 2 * s.tube)),
+                "nlp": type("N", (), {"x0": np.zeros(3), "lbg": np.zeros(2)})()}
     return solve
 
 
 def test_failed_warm_start_is_solved_again_from_the_training_fit(monkeypatch):
     """A warm start from the previous tube's optimum that does not converge is re-solved cold;
     the result is the cold one and records the failed attempt; a converged warm start is kept."""
-    calls = []
+    calls, starts = [], []
     monkeypatch.setattr(jp, "_SETUP_CACHE", {})
     monkeypatch.setattr(jp, "_WARM", {})
     monkeypatch.setattr(jp, "setup", lambda *a, **k: _JS())
-    monkeypatch.setattr(jp, "solve_broad_jump", _fake_solve(calls, lambda warm, tube: not (warm and tube == 0.08)))
+    monkeypatch.setattr(jp, "solve_broad_jump",
+                        _fake_solve(calls, lambda warm, tube: not (warm and tube == 0.08), starts))
     monkeypatch.setattr(jp, "trajectory", lambda js, out: {"sigma2": np.zeros(2)})
     monkeypatch.setattr(latentoc.jump.verify, "verify", lambda *a, **k: {})
     problem = load_problem("broad-jump")
@@ -51,6 +55,14 @@ def test_failed_warm_start_is_solved_again_from_the_training_fit(monkeypatch):
                                            "solve_time_s": 1.0, "distance": 0.4}
     third = jp.solve_jump_problem(problem, tube=0.16).result
     assert calls == [False, True, False, True] and third["warm_start"] and "failed_warm_start" not in third
+    # each warm start gets the primal point and the multipliers (lam_g, lam_x) of the last success
+    (x1, d1), (x2, d2), (x3, d3), (x4, d4) = starts
+    assert x1 is None and d1 is None and x3 is None and d3 is None
+    np.testing.assert_array_equal(x2, np.full(3, 0.04))
+    np.testing.assert_array_equal(d2[0], np.full(2, -0.04))
+    np.testing.assert_array_equal(d2[1], np.full(3, 0.08))
+    np.testing.assert_array_equal(x4, np.full(3, 0.08))  # the cold 0.08 solve's point
+    np.testing.assert_array_equal(d4[1], np.full(3, 0.16))
 
 
 def test_unknown_option_is_refused_by_name():

@@ -223,16 +223,25 @@ def consistent_start(nlp, x0: np.ndarray) -> np.ndarray:
     return x
 
 
-def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np.ndarray | None = None) -> dict:
-    """Build and solve; returns {"result": {...}, "parts": {...}, "nlp": JumpNLP, "w": solution vector}.
+def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np.ndarray | None = None,
+                     duals: tuple[np.ndarray, np.ndarray] | None = None) -> dict:
+    """Build and solve; returns {"result": {...}, "parts": {...}, "nlp": JumpNLP, "w": solution
+    vector, "duals": (lam_g, lam_x)}.
 
     ``x0`` (same settings' variable layout) replaces the training initial guess: a
     continuation (warm start) from a smaller tube, whose optimum is feasible for a larger one.
+    ``duals``: that solve's multipliers (lam_g, lam_x), for Ipopt's warm start from the primal
+    and dual point (:data:`.transcription.WARM_START_OPTIONS`); without them Ipopt starts
+    from x0 with fresh multipliers.
     """
     s = settings or JumpSettings()
     guess = initial_guess(js, s)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, guess, js.sym)
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, guess, js.sym,
+                    warm_start=x0 is not None and duals is not None)
     warm = x0 is not None and np.size(x0) == nlp.x0.size
+    with_duals = warm and duals is not None and np.size(duals[0]) == nlp.lbg.size and np.size(duals[1]) == nlp.x0.size
+    if x0 is not None and duals is not None and not with_duals:  # another layout: fresh multipliers
+        nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, guess, js.sym)
     build_time = nlp.build_time
     t0 = time.perf_counter()
     phase1 = {}
@@ -257,7 +266,8 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
                   "distance": float(np.array(n1.unpack(w1)[3]).ravel()[0])}
         start = w1
     t1 = time.perf_counter()
-    sol = nlp.solver(x0=start, p=1.0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+    start_duals = {"lam_g0": duals[0], "lam_x0": duals[1]} if with_duals else {}
+    sol = nlp.solver(x0=start, p=1.0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg, **start_duals)
     solve_time = time.perf_counter() - t0
     stats = nlp.solver.stats()
     phase2_time = time.perf_counter() - t1
@@ -281,10 +291,11 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
         "multiplier_by_kind": binding,
         "time_scale": float(parts["time_scale"].ravel()[0]),
         "duration": float(parts["time_scale"].ravel()[0]) * js.phases.duration,
-        "settings": asdict(s), "warm_start": bool(warm),
+        "settings": asdict(s), "warm_start": bool(warm), "warm_start_multipliers": bool(with_duals),
         "phase1": phase1, "phase2_time_s": phase2_time,
     }
-    return {"result": result, "parts": parts, "nlp": nlp, "settings": s, "w": w}
+    return {"result": result, "parts": parts, "nlp": nlp, "settings": s, "w": w,
+            "duals": (np.array(sol["lam_g"]).ravel(), np.array(sol["lam_x"]).ravel())}
 
 
 # ------------------------------------------------------------------ trajectory export
@@ -445,7 +456,7 @@ def balanced_edge_weights(C: np.ndarray, tau: np.ndarray, lam0: np.ndarray, free
 
 # ------------------------------------------------------------------ solve layer glue
 _SETUP_CACHE: dict = {}
-_WARM: dict = {}  # (setup key, settings without tube) -> (delta, solution vector) of the last success
+_WARM: dict = {}  # (setup key, settings without tube) -> (delta, solution vector, (lam_g, lam_x)) of the last success
 
 
 # the ``[options]`` a broad-jump problem file may set (mass, height and learned_dof describe the
@@ -523,7 +534,8 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     s.print_level = 5 if verbose else 0
     wkey = (key, json.dumps({k: v for k, v in asdict(s).items() if k not in ("tube", "print_level")}, sort_keys=True))
     prev = _WARM.get(wkey)
-    out = solve_broad_jump(js, s, x0=prev[1] if prev is not None and prev[0] <= delta else None)
+    warm = prev is not None and prev[0] <= delta
+    out = solve_broad_jump(js, s, x0=prev[1] if warm else None, duals=prev[2] if warm else None)
     if out["result"]["warm_start"] and not out["result"]["success"]:
         # a warm start can end worse than a cold one (delta 0.08 of the sweep: 1500 iterations,
         # 0.45 m, from the 0.04 optimum); then solve from the training fit, and report both
@@ -531,7 +543,7 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
         out = solve_broad_jump(js, s)
         out["result"]["failed_warm_start"] = {k: r0[k] for k in ("status", "iterations", "solve_time_s", "distance")}
     if out["result"]["success"]:
-        _WARM[wkey] = (delta, out["w"])
+        _WARM[wkey] = (delta, out["w"], out["duals"])
     traj = trajectory(js, out)
     checks = verify(js.model, traj, s.mu)
     r = out["result"]

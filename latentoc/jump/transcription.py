@@ -204,6 +204,17 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   rows (build 94 s -> 8.7 s, :func:`.lifted.compile_node_rows`), this version: sweep 88, 52, 53,
   36, 46, 53 s per solve (63-128 iterations), the same distances (1.006-1.035 m); per iteration
   the Hessian 0.26 s, the Jacobian 0.10 s, the rest of Ipopt 0.19 s.
+* the sweep's warm starts with the previous optimum's multipliers (:data:`WARM_START_OPTIONS`),
+  this version: 80, 32, 75, 28, 30, 13 s per solve (128, 62, 150, 57, 66, 38 iterations), the
+  same distances to 1 mm, 5 min 15 s for the sweep.  Ipopt's timing statistics (phase 2 at
+  delta 0.005, 30 iterations, 0.47 s each): Lagrangian Hessian 0.21 s, constraint Jacobian
+  0.08 s, the linear solves (MUMPS, KKT of 785 variables and 13706 rows, 296k Jacobian
+  nonzeros) 0.15 s.  Per evaluation of the node Hessians (2 threads): flight nodes 81 ms (80
+  nodes), wrench samples 64 ms (124), contact nodes 43 ms (94), tube 35 ms (259), pitch rate
+  35 ms (159).  Tried and not kept: ``mu_oracle probing`` (no convergence in 10 min),
+  ``-march=native`` (12 % on the tube Hessian, a recompile of every block), MUMPS orderings
+  (phase 2 at 0.005, default 140 iterations in 78 s: METIS 140 in 73 s, AMD 122 in 69 s, QAMD
+  138 in 75 s, the same distance; 0.49-0.56 s per iteration).
 """
 from __future__ import annotations
 
@@ -231,6 +242,14 @@ from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]
 JUMP_HESSIANS = ("limited-memory", "exact")
+# Ipopt's warm start from a neighbouring solve's primal and dual point (the sweep's continuation
+# in delta): the start and its multipliers pushed only 1e-5 off their bounds, the barrier started
+# small.  Delta 0.005 -> 0.01 from the 0.005 optimum: 66 iterations (37 s) against 103 (54 s) from
+# the primal point alone, same distance 1.0204 m; pushes of 1e-6 with mu 1e-5: 98 iterations;
+# mu_init 1e-3: 66; with mu_strategy monotone: 78 (measured, issue 6)
+WARM_START_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-4,
+                      "ipopt.warm_start_bound_push": 1e-5, "ipopt.warm_start_mult_bound_push": 1e-5,
+                      "ipopt.warm_start_slack_bound_push": 1e-5}
 
 
 @dataclass
@@ -648,8 +667,12 @@ def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list
 
 def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Phases,
               limits: TrainingDynamics, settings: JumpSettings, init: dict,
-              sym: SymbolicModel | None = None) -> JumpNLP:
-    """Assemble the NLP; ``init`` holds initial guesses (P, phi_s, phi_l, x_L, lam)."""
+              sym: SymbolicModel | None = None, warm_start: bool = False) -> JumpNLP:
+    """Assemble the NLP; ``init`` holds initial guesses (P, phi_s, phi_l, x_L, lam).
+
+    ``warm_start``: Ipopt starts from given multipliers too (``lam_g0``, ``lam_x0`` of a
+    neighbouring solve, :data:`WARM_START_OPTIONS`) instead of pushing the start into the
+    interior with fresh ones."""
     t0 = time.perf_counter()
     s = settings
     if s.hessian not in JUMP_HESSIANS:
@@ -879,6 +902,8 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
             "print_time": False, "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 10,
             "ipopt.constr_viol_tol": 1e-6, "ipopt.mu_strategy": "adaptive", "jac_g": jac_g,
             "calc_lam_p": False, "calc_lam_x": False}  # CasADi must not differentiate the compiled rows
+    if warm_start:
+        opts.update(WARM_START_OPTIONS)
     if exact:
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(names))
         H = lam_f * ca.hessian(f, w)[0]
