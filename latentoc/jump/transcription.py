@@ -214,7 +214,12 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   35 ms (159).  Tried and not kept: ``mu_oracle probing`` (no convergence in 10 min),
   ``-march=native`` (12 % on the tube Hessian, a recompile of every block), MUMPS orderings
   (phase 2 at 0.005, default 140 iterations in 78 s: METIS 140 in 73 s, AMD 122 in 69 s, QAMD
-  138 in 75 s, the same distance; 0.49-0.56 s per iteration).
+  138 in 75 s, the same distance; 0.49-0.56 s per iteration).  Ipopt's log of that solve: the
+  Hessian is regularised (wrong inertia) in most iterations, by up to 1e4 early on and 0.1-1
+  later, with primal steps of 0.01-0.3 in the middle third; the inertia-free curvature test
+  (``neg_curv_test_tol`` 1e-12 or 1e-11) instead took 445 iterations (253 s) to another local
+  optimum, 0.786 m.  Phase 2 straight from the training start, with no phase 1: 151 iterations
+  to 1.0066 m, no saving over phase 1's 38 cheaper ones plus 128.
 """
 from __future__ import annotations
 
