@@ -65,6 +65,21 @@ def test_failed_warm_start_is_solved_again_from_the_training_fit(monkeypatch):
     np.testing.assert_array_equal(d4[1], np.full(3, 0.16))
 
 
+def test_multipliers_of_another_layout_are_refused_by_name(monkeypatch):
+    """Warm-start multipliers (or their x0) whose sizes do not fit the built NLP are an error
+    naming ``duals`` and the sizes, before any solve."""
+    built = []
+    nlp = type("N", (), {"x0": np.zeros(3), "lbg": np.zeros(2)})()
+    monkeypatch.setattr(jp, "initial_guess", lambda js, s: {})
+    monkeypatch.setattr(jp, "build_nlp", lambda *a, warm_start=False: built.append(warm_start) or nlp)
+    js = type("JS", (), {k: None for k in ("model", "smap", "gpdm", "geom", "phases", "limits", "sym")})()
+    for x0, duals in [(np.zeros(3), (np.zeros(5), np.zeros(3))), (np.zeros(3), (np.zeros(2), np.zeros(4))),
+                      (np.zeros(4), (np.zeros(2), np.zeros(3))), (None, (np.zeros(2), np.zeros(3)))]:
+        with pytest.raises(ValueError, match=r"duals: \(lam_g, lam_x\) of sizes .* \(2 rows, 3 variables\)"):
+            jp.solve_broad_jump(js, jp.JumpSettings(), x0=x0, duals=duals)
+    assert built == [True] * 4
+
+
 def test_unknown_option_is_refused_by_name():
     """A typo in [options] is an error naming the key, before any set-up or solve."""
     from latentoc.solve import SolveError

@@ -231,17 +231,18 @@ def solve_broad_jump(js: JumpSetup, settings: JumpSettings | None = None, x0: np
     ``x0`` (same settings' variable layout) replaces the training initial guess: a
     continuation (warm start) from a smaller tube, whose optimum is feasible for a larger one.
     ``duals``: that solve's multipliers (lam_g, lam_x), for Ipopt's warm start from the primal
-    and dual point (:data:`.transcription.WARM_START_OPTIONS`); without them Ipopt starts
-    from x0 with fresh multipliers.
+    and dual point (:data:`.transcription.WARM_START_OPTIONS`; they and x0 must fit the NLP,
+    else ValueError); without them Ipopt starts from x0 with fresh multipliers.
     """
     s = settings or JumpSettings()
     guess = initial_guess(js, s)
+    with_duals = duals is not None
     nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, guess, js.sym,
-                    warm_start=x0 is not None and duals is not None)
+                    warm_start=with_duals)
     warm = x0 is not None and np.size(x0) == nlp.x0.size
-    with_duals = warm and duals is not None and np.size(duals[0]) == nlp.lbg.size and np.size(duals[1]) == nlp.x0.size
-    if x0 is not None and duals is not None and not with_duals:  # another layout: fresh multipliers
-        nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, guess, js.sym)
+    if with_duals and not (warm and np.size(duals[0]) == nlp.lbg.size and np.size(duals[1]) == nlp.x0.size):
+        raise ValueError(f"duals: (lam_g, lam_x) of sizes ({np.size(duals[0])}, {np.size(duals[1])}) with x0 of size "
+                         f"{np.size(x0)} do not fit this NLP ({nlp.lbg.size} rows, {nlp.x0.size} variables)")
     build_time = nlp.build_time
     t0 = time.perf_counter()
     phase1 = {}
