@@ -117,10 +117,45 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(jump_se
     assert (names == "wrench_friction").sum() == 2 * n_samples and (names == "cop_front").sum() == n_samples
     n_back = sum(int((names == k).sum()) for k in ("cop_heel", "cop_ball", "cop_pad"))
     assert n_back == n_samples and (names == "cop_pad").sum() > 0 and (names == "cop_heel").sum() > 0
-    assert (names == "torque_free").sum() == 30 * n_samples  # trunk, neck, head and arm joints
+    # trunk, neck, head and left arm joints (the right arm's rows are its mirror copies)
+    assert (names == "torque_free").sum() == 18 * n_samples
     mass = sum(i.mass for i in js.model.inertias)
     with pytest.raises(ValueError, match="unknown optional row blocks"):
         node_rows(RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, 0.4, mass), jit=False, optional=("wrench",))
+
+
+def test_right_torque_rows_left_out_are_mirror_copies_of_the_left(jump_setup):
+    """The NLP keeps the torque rows of the centre and left joints only: on the exported motion,
+    numeric pinocchio.rnea gives every right joint its left partner's torque times the mirror
+    factor, and the training limits are mirror images, so the right rows would repeat the left.
+    Limits that are not mirror images keep every row."""
+    import dataclasses
+
+    js = jump_setup
+    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False)
+    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
+    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(consistent_start(nlp, nlp.x0)))}
+    tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
+    mass = sum(i.mass for i in js.model.inertias)
+    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass)
+    pairs = [(r - 7, int(js.smap.learned_q[y]) - 7, f) for r, y, f in js.smap.copied]
+    right = {r for r, _, _ in pairs}
+    assert len(pairs) == 19 and sorted(set(rm.active[rm.unmirrored]) & right) == []
+    assert len(rm.unmirrored) == len(rm.active) - len(right & set(rm.active))
+    names = np.array(nlp.names)
+    n_nodes = len(nlp.meta["grid"]["stance"]) + len(nlp.meta["grid"]["flight"]) + len(nlp.meta["grid"]["land"])
+    assert (names == "torque").sum() == n_nodes * len(rm.unmirrored)
+    d = js.model.createData()
+    for i in range(0, len(tr["t"]), 97):
+        tau = pin.rnea(js.model, d, tr["q"][i], tr["v"][i], tr["a"][i])[6:]
+        for r, left, f in pairs:
+            assert abs(tau[r] - f * tau[left]) <= 1e-9 * max(1.0, np.abs(tau).max())
+    lo, hi = js.limits.tau_min, js.limits.tau_max
+    for r, left, f in pairs:
+        assert np.allclose((lo[r], hi[r]), (lo[left], hi[left]) if f > 0 else (-hi[left], -lo[left]))
+    skewed = dataclasses.replace(js.limits, tau_max=hi + np.eye(len(hi))[pairs[0][0]])
+    rm2 = RowModel(js.sym, js.smap, js.gpdm, js.geom, skewed, s.mu, mass)
+    assert np.array_equal(rm2.unmirrored, np.arange(len(rm2.active)))
 
 
 def _spline_base_nlp(js, **kw):

@@ -385,6 +385,27 @@ class RowModel:
         joint_of_v = np.concatenate([[j] * m.joints[j].nv for j in range(1, m.njoints)])
         return np.array([i for i, a in enumerate(self.active) if joint_of_v[6 + a] not in legs], int)
 
+    @property
+    def unmirrored(self) -> np.ndarray:
+        """Positions in :attr:`active` whose torque rows the NLP keeps: all but the right side's
+        copies.  The model and the motion are mirror images, so a right joint's torque is its left
+        partner's times the mirror factor (to rounding), and when its limits are the mirrored ones
+        too its rows repeat the left's (13706 -> 8912 rows; duplicated active rows also make the
+        constraint Jacobian rank-deficient).  Limits that are not mirror images keep every row."""
+        a = self.active
+        pos = {int(j): k for k, j in enumerate(a)}
+        lo, hi = self.limits.tau_min, self.limits.tau_max
+        right = []
+        for r_q, y_idx, f in self.smap.copied:
+            r, left = r_q - 7, int(self.smap.learned_q[y_idx]) - 7
+            mlo, mhi = (lo[left], hi[left]) if f > 0 else (-hi[left], -lo[left])
+            tol = 1e-9 * max(1.0, abs(hi[left]), abs(lo[left]))
+            if abs(lo[r] - mlo) > tol or abs(hi[r] - mhi) > tol:
+                return np.arange(len(a))
+            if r in pos:
+                right.append(pos[r])
+        return np.setdiff1d(np.arange(len(a)), right)
+
     def torque_rows(self, tau_joint):
         """Joint torques of the active joints in N m; build_nlp scales them by the limit range
         outside the compiled rows, so that new limits (margins) need no new C code."""
@@ -659,14 +680,18 @@ def _merge_samples(samples: np.ndarray, extra: np.ndarray, nodes: np.ndarray, ga
     return np.sort(np.concatenate([samples, np.asarray(keep, float)]))
 
 
-def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]]) -> tuple[list[int], list[str]]:
-    """Row indices (node-major) and names of the chosen parts of each node."""
+def _layout_indices(layout: dict[str, slice], n_out: int, K: int, per_node: list[list[str]],
+                    subsets: dict[str, np.ndarray] | None = None) -> tuple[list[int], list[str]]:
+    """Row indices (node-major) and names of the chosen parts of each node; ``subsets`` keeps
+    only the given positions of a part."""
     idx, names = [], []
+    subsets = subsets or {}
     for k in range(K):
         for part in per_node[k]:
             s = layout[part]
-            idx.extend(range(k * n_out + s.start, k * n_out + s.stop))
-            names.extend([part] * (s.stop - s.start))
+            rows = s.start + np.asarray(subsets[part]) if part in subsets else np.arange(s.start, s.stop)
+            idx.extend((k * n_out + rows).tolist())
+            names.extend([part] * len(rows))
     return idx, names
 
 
@@ -733,13 +758,19 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     def lat_rows(t):
         return _time_scaled(_spline_rows(sp, Pm, t), dlat, ik)  # (x, xd, xdd) in real time: 3d x K
 
+    # torque rows: the active joints at the nodes, the force-free ones at the wrench samples, the
+    # right side's mirror copies left out (:attr:`RowModel.unmirrored`)
+    kept = rm.unmirrored
+    torque_joints = {"torque": kept, "torque_free": np.intersect1d(rm.force_free, kept)}
+    subsets = {"torque": torque_joints["torque"],
+               "torque_free": np.searchsorted(rm.force_free, torque_joints["torque_free"])}
     g, jac, names = [], [], []
     terms = []  # (block, U, affine, selected rows of the block, first NLP row) for the exact Hessian
 
     def add(block: str, U: ca.MX, per_node: list[list[str]], affine: bool = affine):
         nr, layout = blocks[block]
         gb, jb = lifted_rows(nr, U, w, affine)
-        idx, nm = _layout_indices(layout, nr.n_out, U.shape[1], per_node)
+        idx, nm = _layout_indices(layout, nr.n_out, U.shape[1], per_node, subsets)
         if idx:
             gi, ji = select_rows(gb, jb, np.array(idx))
             terms.append((nr, U, affine, idx, len(names)))
@@ -820,9 +851,7 @@ def build_nlp(model: pin.Model, smap, gpdm: GPDM, geom: FootGeometry, phases: Ph
     add("tube_rows", (ca.sparsify(ca.DM(sp.basis(t_tube, 0))) @ Pm).T, [["tube"] for _ in t_tube], affine=True)
 
     names_a = np.array(names)
-    # torque rows (all active joints at the nodes, the force-free ones at the wrench samples),
-    # in units of each joint's limit range
-    torque_joints = {"torque": np.arange(len(rm.active)), "torque_free": rm.force_free}
+    # torque rows in units of each joint's limit range
     row_scale = np.ones(len(names))
     for k, pos in torque_joints.items():
         sel = names_a == k
