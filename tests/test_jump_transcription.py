@@ -5,6 +5,7 @@ import pytest
 
 from latentoc.jump.contact import TOE_PAD, foot_points, point_jacobians
 from latentoc.jump.problem import consistent_start, initial_guess, trajectory
+from latentoc.jump.support_polygon import polygon_from_vertices
 from latentoc.jump.transcription import JumpSettings, RowModel, build_nlp, node_rows
 from latentoc.jump.verify import sagittal_contact_wrench
 from latentoc.jump.zmp import G
@@ -215,6 +216,10 @@ def test_spline_base_contact_rows_match_numeric_pinocchio(jump_setup):
         np.testing.assert_allclose(r[layout["toe_position"]], [toe[0] - (xL if land else 0.0), toe[2]], atol=1e-9)
         np.testing.assert_allclose(r[layout["heel_height"]], [heel[2]], atol=1e-9)
         np.testing.assert_allclose(r[layout["ball_height"]], [ball[2]], atol=1e-9)
+        # the projected COM against the polygon of both feet (heel_R, toe_R, toe_L, heel_L)
+        A, b = polygon_from_vertices([[heel[0], -heel[1]], [toe[0], -toe[1]], toe[:2], heel[:2]])
+        com = pin.centerOfMass(js.model, d, q)
+        np.testing.assert_allclose(r[layout["com_polygon"]], A @ com[:2] + b, atol=1e-9)
 
 
 def test_spline_base_takeoff_and_touchdown_rows_match_numeric_momentum(jump_setup):
@@ -252,3 +257,31 @@ def test_spline_base_takeoff_and_touchdown_rows_match_numeric_momentum(jump_setu
     np.testing.assert_allclose(r, 0.0, atol=1e-8)
     i = int(np.searchsorted(tr["t"], js.phases.takeoff))
     assert np.max(np.abs(tr["q"][i + 1][:3] - tr["q"][i][:3])) < 5e-3
+
+
+def test_flight_rows_match_numeric_pinocchio_on_the_exported_flight(jump_setup):
+    """At 1 kHz samples of the exported ballistic flight, the flight block's torque rows equal
+    numeric pinocchio.rnea of the exported (q, v, a) and its clearance rows the heights of the
+    heel, ball and toe points from forward kinematics (the block computes the motion about the
+    COM and moves the points by the COM's ballistic path)."""
+    from latentoc.jump.base import freeflyer_to_base
+
+    js = jump_setup
+    s, nlp, parts, tr = _spline_base_nlp(js)
+    mass = sum(i.mass for i in js.model.inertias)
+    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")
+    block, layout = node_rows(rm, jit=False)["flight_rows"]
+    sp = nlp.meta["splines"][0]
+    ph, d = js.phases, js.model.createData()
+    c_to, cd_to, L_to = (np.asarray(parts[k], float).ravel() for k in ("c_to", "cd_to", "L_to"))
+    flight = np.where((tr["t"] > ph.takeoff) & (tr["t"] < ph.touchdown))[0]
+    for i in flight[[2, len(flight) // 3, len(flight) // 2, -3]]:
+        t = tr["t"][i]
+        X = [sp.evaluate(parts["P"], np.array([t]), k)[0] for k in range(3)]
+        pitch = freeflyer_to_base(tr["q"][i][:7])[0, 2]
+        u = np.concatenate([*X, [pitch], L_to, c_to, cd_to, [t - ph.takeoff]])
+        r = np.array(block.rows(u)).ravel()
+        tau = pin.rnea(js.model, d, tr["q"][i], tr["v"][i], tr["a"][i])
+        np.testing.assert_allclose(r[layout["torque"]], tau[6:][rm.active], atol=1e-6 * max(1.0, np.abs(tau).max()))
+        pin.framesForwardKinematics(js.model, d, tr["q"][i])
+        np.testing.assert_allclose(r[layout["flight_clearance"]], foot_points(js.model, d, js.geom)[2], atol=1e-9)

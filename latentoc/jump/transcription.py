@@ -429,14 +429,33 @@ def _contact_base(rm: RowModel, u: ca.SX):
     return r[0:3], r[3:6], r[6:9], r[9]
 
 
-def _anchored_dynamics(rm: RowModel, u: ca.SX) -> tuple[ca.SX, ca.SX]:
-    """q and rnea(q, v, a) of the contact-phase motion whose inputs start with
-    u = (x, xd, xdd, base inputs, ...) (:func:`_contact_base`)."""
+def _galilean(b, bd):
+    """The base pose and velocity without their translation: (0, 0, pitch), (0, 0, pitch rate).
+
+    A uniform translation and a uniform velocity of the whole body change neither the joint
+    torques nor the base rows of RNEA (the base wrench in the base frame), nor the Jacobians of
+    the contact points: the gravity field is uniform and Newton's laws hold in every inertial
+    frame (numeric RNEA: equal to 7e-15 of 393 N m).  Node rows computed this way do not depend
+    on the base's position and linear velocity, so their compiled Hessians skip that (numerically
+    zero) curvature; point positions add the translation back (:func:`_world_points`)."""
+    return ca.vertcat(0, 0, b[2]), ca.vertcat(0, 0, bd[2])
+
+
+def _world_points(rm: RowModel, q, shift):
+    """Heel, ball and toe points (3 x 3) of the relative pose q (:func:`_galilean`), moved by
+    the base translation ``shift`` (x, z)."""
+    return points_function(rm.sym, rm.geom)(q) + ca.repmat(ca.vertcat(shift[0], 0, shift[1]), 1, 3)
+
+
+def _anchored_dynamics(rm: RowModel, u: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """The relative q (:func:`_galilean`), rnea(q, v, a) and the base translation (x, z) of the
+    contact-phase motion whose inputs start with u = (x, xd, xdd, base inputs, ...)
+    (:func:`_contact_base`)."""
     d = rm.gpdm.latent_dim
     b, bd, bdd, _ = _contact_base(rm, u)
     _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, u[:d], u[d:2 * d], u[2 * d:3 * d])
-    q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
-    return q, rm.sym.rnea(q, v, a)
+    q, v, a = _configuration(*_galilean(b, bd), bdd, qj, vj, aj)
+    return q, rm.sym.rnea(q, v, a), b[:2]
 
 
 def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
@@ -454,9 +473,9 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     nb = BASE_INPUTS[rm.base_model]
     u = ca.SX.sym("u", 3 * d + nb + 6)
     lam = u[3 * d + nb:]
-    q, tau = _anchored_dynamics(rm, u)
+    q, tau, shift = _anchored_dynamics(rm, u)
     gen = point_generalized_force(rm.sym, rm.geom, q, point_forces(lam * W, rm.mu))
-    P = points_function(rm.sym, rm.geom)(q)
+    P = _world_points(rm, q, shift)
     w = toe_wrench(lam, P, rm.mu)  # body weights, moment about the toe tip
     fz, my = w[2], w[4]
     heel, toe = P[:2, 0], P[:2, 2]
@@ -475,7 +494,7 @@ def contact_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
         parts["toe_position"] = ca.vertcat(P[0, 2] - _contact_base(rm, u)[3], P[2, 2])
         parts["heel_height"] = P[2, 0]
     parts["zmp_polygon"] = _homogeneous_rows(heel, toe, ca.vertcat(toe[0] * fz - my, 0), fz)
-    parts["com_polygon"] = rows(rm.sym.com(q)[:2])
+    parts["com_polygon"] = rows(rm.sym.com(q)[:2] + ca.vertcat(shift[0], 0))
     return _node_rows("jump_contact_node" if rm.base_model == "pinned" else "jump_contact_node_spline_base",
                       u, parts)
 
@@ -499,10 +518,10 @@ def wrench_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     """
     W = rm.weight
     u = ca.SX.sym("u", 3 * rm.gpdm.latent_dim + BASE_INPUTS[rm.base_model])
-    q, tau = _anchored_dynamics(rm, u)
+    q, tau, shift = _anchored_dynamics(rm, u)
     J = rm.sym.frame_jacobian(TOE)(q) + rm.sym.frame_jacobian(RIGHT_TOE)(q)
     fx, fz, my = ca.vertsplit(ca.solve(J.T[SAGITTAL_ROWS, SAGITTAL_ROWS], tau[SAGITTAL_ROWS]) / W)
-    P = points_function(rm.sym, rm.geom)(q)
+    P = _world_points(rm, q, shift)
     toe_x = P[0, 2]
     parts = {
         "wrench_normal": fz,
@@ -552,11 +571,16 @@ def flight_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     u = ca.SX.sym("u", 3 * d + 7)
     x, xd, xdd = u[:d], u[d:2 * d], u[2 * d:3 * d]
     p, L, c_to, cd_to, tt = u[3 * d], u[3 * d + 1], u[3 * d + 2:3 * d + 4], u[3 * d + 4:3 * d + 6], u[3 * d + 6]
-    b, bd, bdd = _flight_base(rm, x, xd, xdd, p, L, c_to, cd_to, tt)
+    # the motion about the COM (:func:`_galilean`): COM at the origin at rest, accelerating at g;
+    # the COM's ballistic position c(t) moves the points
+    fns = flight_functions(rm.sym, rm.smap, rm.gpdm)
+    pd, pdd = fns["pitch_rate"](x, xd, xdd, L)
+    g = ca.DM(GRAVITY)
+    b, bd, bdd = fns["base"](x, xd, xdd, p, pd, pdd, ca.DM.zeros(2), ca.DM.zeros(2), g)
     _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
     q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
     tau = rm.sym.rnea(q, v, a)
-    P = points_function(rm.sym, rm.geom)(q)
+    P = _world_points(rm, q, c_to + cd_to * tt + 0.5 * g * tt ** 2)
     return _node_rows("jump_flight_node", u, {"torque": rm.torque_rows(tau[6:]), "flight_clearance": P[2, :].T})
 
 
