@@ -32,8 +32,12 @@ _CHECKS = ("max_dynamics_residual", "max_flight_residual", "min_normal_force", "
            "max_sigma2", "time_scale", "toe_displacement", "toe_slip", "eq33_feet_distance")
 
 
+# the other start of a tube solved from two (the broad jump's sweep_starts), kept when present
+_STARTS = ("other_start",)
+
+
 def _row(r: dict[str, Any]) -> dict[str, Any]:
-    return {**{k: r.get(k) for k in _FIELDS}, **{k: r[k] for k in _CHECKS if k in r}}
+    return {**{k: r.get(k) for k in _FIELDS}, **{k: r[k] for k in _CHECKS + _STARTS if k in r}}
 
 
 def _print_now(line: str) -> None:

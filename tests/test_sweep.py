@@ -32,7 +32,7 @@ def test_rows_keep_the_contact_checks(monkeypatch):
         result = {"method": "latent", "tube": 0.02, "tube_spec": 0.02, "cost": 0.4, "cost_initial": 0.7,
                   "performance_gain_pct": -40.0, "solve_time_s": 1.0, "status": "Solve_Succeeded", "success": True,
                   "max_friction_ratio": 0.38, "cop_margin": 0.01, "time_scale": 0.97,
-                  "toe_slip": 0.02}
+                  "toe_slip": 0.02, "other_start": {"warm_start": True, "distance": 0.35}}
         trajectory: dict = {}
 
     monkeypatch.setattr(sw, "solve", lambda *a, **k: Sol())
@@ -41,6 +41,7 @@ def test_rows_keep_the_contact_checks(monkeypatch):
     assert row["max_friction_ratio"] == 0.38 and row["cop_margin"] == 0.01 and row["time_scale"] == 0.97
     assert row["toe_slip"] == 0.02 and "toe_displacement" not in row
     assert row["cost"] == 0.4 and "zmp_margin" not in row
+    assert row["other_start"] == {"warm_start": True, "distance": 0.35}  # the start not kept
 
 
 def test_table_and_files(rows, tmp_path):

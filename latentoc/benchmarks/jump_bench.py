@@ -19,6 +19,12 @@ durations, exact Hessian):
   Jacobian alone takes about 50 ms (80 nodes, 425k instructions each), its Hessian 110 ms (1.15M).
   Warm (``sweep broad-jump``, each tube from the previous optimum): 36-53 s per solve, 63-102
   iterations.
+* Without the right joints' torque rows (mirror copies of the left's; 8912 rows instead of 13706)
+  and with the node rows computed about the base's translation (this version): cold solves at
+  delta 0.005, 0.02, 0.08 of 104, 80 and 85 s (phase 1 37-38 iterations in 11-12 s, phase 2 186,
+  141, 156); per iteration the Hessian 0.25 s, the Jacobian 0.10 s, the linear solves 0.12 s.
+  The sweep (``sweep_starts = "warm+cold"``): warm solves 14-24 s (35-59 iterations) but 52 s at
+  delta 0.01, cold ones 52-97 s.
 * Tried and not kept, phase 2 from the same phase-1 point at delta 0.005 (140 iterations, 82 s):
   ``mu_init`` 1e-3 to 1e-5 with small bound pushes, 140-143 iterations; MUMPS without scaling, or
   with scaling 8, 141 and 132 iterations in 80 s; SPRAL as the linear solver, 135 iterations in

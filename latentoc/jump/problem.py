@@ -465,7 +465,16 @@ _WARM: dict = {}  # (setup key, settings without tube) -> (delta, solution vecto
 OPTIONS = frozenset({
     "mass", "height", "learned_dof", "friction", "restitution", "training_jumps", "n_stance", "n_flight", "n_land",
     "torque_margin", "torque_floor", "two_phase", "torque_limits", "polygon", "contact_model", "time_scale",
-    "base_model", "n_base_stance", "n_base_land", "foot_tolerance", "wrench_spacing", "training_stride"})
+    "base_model", "n_base_stance", "n_base_land", "foot_tolerance", "wrench_spacing", "training_stride",
+    "sweep_starts"})
+
+
+SWEEP_STARTS = ("warm+cold", "warm")  # [options] sweep_starts: a tube after a solved smaller one
+
+
+def _better(a: dict, b: dict) -> bool:
+    """Whether result ``a`` is a better jump than ``b``: converged first, then farther."""
+    return (a["success"], a["distance"]) > (b["success"], b["distance"])
 
 
 def check_options(problem) -> None:
@@ -536,13 +545,21 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     wkey = (key, json.dumps({k: v for k, v in asdict(s).items() if k not in ("tube", "print_level")}, sort_keys=True))
     prev = _WARM.get(wkey)
     warm = prev is not None and prev[0] <= delta
+    starts = o.get("sweep_starts", "warm+cold")
+    if starts not in SWEEP_STARTS:
+        raise SolveError(f"problem {problem.name!r}, [options] sweep_starts must be one of {SWEEP_STARTS}, "
+                         f"got {starts!r}")
     out = solve_broad_jump(js, s, x0=prev[1] if warm else None, duals=prev[2] if warm else None)
-    if out["result"]["warm_start"] and not out["result"]["success"]:
-        # a warm start can end worse than a cold one (delta 0.08 of the sweep: 1500 iterations,
-        # 0.45 m, from the 0.04 optimum); then solve from the training fit, and report both
-        r0 = out["result"]
-        out = solve_broad_jump(js, s)
-        out["result"]["failed_warm_start"] = {k: r0[k] for k in ("status", "iterations", "solve_time_s", "distance")}
+    if out["result"]["warm_start"] and (starts == "warm+cold" or not out["result"]["success"]):
+        # a warm start can end in a worse local optimum than a cold one: 1500 iterations and
+        # 0.45 m at delta 0.08 from the 0.04 optimum (an earlier version), and 1.013 m at delta
+        # 0.02 where the cold solve finds 1.031 m (measured, issue 6); so the tube is solved from
+        # the training fit too, and the better optimum is kept, the other reported
+        cold = solve_broad_jump(js, s)
+        out, other = (cold, out) if _better(cold["result"], out["result"]) else (out, cold)
+        ro = other["result"]
+        out["result"]["other_start"] = {"warm_start": ro["warm_start"],
+                                        **{k: ro[k] for k in ("status", "iterations", "solve_time_s", "distance")}}
     if out["result"]["success"]:
         _WARM[wkey] = (delta, out["w"], out["duals"])
     traj = trajectory(js, out)

@@ -220,6 +220,28 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   (``neg_curv_test_tol`` 1e-12 or 1e-11) instead took 445 iterations (253 s) to another local
   optimum, 0.786 m.  Phase 2 straight from the training start, with no phase 1: 151 iterations
   to 1.0066 m, no saving over phase 1's 38 cheaper ones plus 128.
+* the right joints' torque rows left out (:attr:`RowModel.unmirrored`; they repeated the left's
+  exactly) and the node rows computed about the base's position and velocity
+  (:func:`_galilean`), this version: 8912 rows instead of 13706, 181k inequality-Jacobian
+  nonzeros instead of 284k; phase 2 at delta 0.005 from the same phase-1 point 122 iterations in
+  57 s (140 in 78 s before), the linear solves 0.12 s per iteration (0.15).  The node Hessians
+  lost 10-16 % of their instructions, but their evaluation times hardly moved (contact 38 ms,
+  wrench samples 64 ms, flight 80 ms, tube 38 ms, pitch rate 37 ms): per iteration the
+  Hessian still takes 0.25 s, the Jacobian 0.10 s.  Cold solves (phase 1 + phase 2) at delta
+  0.005, 0.02, 0.08: 104, 80, 85 s (37-38 + 186, 141, 156 iterations).  Tried there and not
+  kept, as no setting won at every delta: ``adaptive_mu_globalization kkt-error`` 53, 77, 81 s;
+  ``bound_mult_init_method mu-based`` 55, 92 s; phase 2 alone from the old phase-1 point:
+  ``obj_scaling_factor`` 10 / 0.1 110 / 140 iterations, ``nlp_scaling_max_gradient`` 10 133,
+  ``alpha_for_y min-dual-infeas`` 182, ``recalc_y`` 122, ``mu_strategy monotone`` (mu_init 0.01)
+  123; the Lagrangian Hessian without the flight nodes' curvature (82 ms less per iteration,
+  an inexact Hessian): 84 and 65 s at 0.005 and 0.02.  The split of the node Hessians at the
+  GP mean (J_z^T H_R J_z plus the kernels' curvature, instead of CasADi's forward-over-reverse
+  through the whole node) agreed to 1e-12 but had more instructions for the flight node
+  (1.74M against 1.04M) and the contact node, fewer only for the wrench samples.  The warm sweep
+  of this version stayed in a worse local optimum (1.013 m at delta 0.02 against 1.031 m cold,
+  1.014 m at 0.16 after 1.015 m at 0.08), so the sweep now solves each tube warm and cold and
+  keeps the better (:mod:`.problem`, ``sweep_starts``): 1.008, 1.011, 1.031, 1.032, 1.034,
+  1.035 m, 10 min 17 s.
 """
 from __future__ import annotations
 
