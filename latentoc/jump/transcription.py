@@ -241,7 +241,10 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   of this version stayed in a worse local optimum (1.013 m at delta 0.02 against 1.031 m cold,
   1.014 m at 0.16 after 1.015 m at 0.08), so the sweep now solves each tube warm and cold and
   keeps the better (:mod:`.problem`, ``sweep_starts``): 1.008, 1.011, 1.031, 1.032, 1.034,
-  1.035 m, 10 min 17 s.
+  1.035 m, 10 min 17 s.  Also tried and not kept: a feasibility solve with the wrench samples
+  between phase 1 and phase 2 (72 and 86 iterations; 101 s and 109 s in all at delta 0.005 and
+  0.02, against 104 s and 80 s); the tube Hessian in closed form (K^-1 products, 232k
+  instructions against CasADi's 220k, the same 37-44 ms for the 259 points).
 """
 from __future__ import annotations
 
