@@ -95,9 +95,11 @@ def test_warm_sweep_starts_solve_cold_only_after_a_failed_warm_start(monkeypatch
     assert calls == [False, True, False, True]
     assert not second["warm_start"] and second["other_start"]["status"] == "Maximum_Iterations_Exceeded"
     assert third["warm_start"] and "other_start" not in third
-    bad = _patched(monkeypatch, [], lambda warm, tube: (True, 0.8), sweep_starts="cold")
+    bad_calls = []
+    bad = _patched(monkeypatch, bad_calls, lambda warm, tube: (True, 0.8), sweep_starts="cold")
     with pytest.raises(SolveError, match="sweep_starts must be one of"):
         jp.solve_jump_problem(bad, tube=0.04)
+    assert bad_calls == [] and jp._SETUP_CACHE == {}  # refused before set-up and solve
 
 
 def test_multipliers_of_another_layout_are_refused_by_name(monkeypatch):

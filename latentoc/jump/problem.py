@@ -478,13 +478,18 @@ def _better(a: dict, b: dict) -> bool:
 
 
 def check_options(problem) -> None:
-    """Refuse ``[options]`` keys a broad-jump problem does not know (a typo would be ignored)."""
+    """Refuse ``[options]`` keys a broad-jump problem does not know (a typo would be ignored),
+    and a ``sweep_starts`` it does not know, before any set-up."""
     from ..solve import SolveError
 
     unknown = sorted(set(problem.options) - OPTIONS)
     if unknown:
         raise SolveError(f"problem {problem.name!r}: unknown [options] key(s) {unknown}; "
                          f"a broad-jump problem knows {sorted(OPTIONS)}")
+    starts = problem.options.get("sweep_starts", SWEEP_STARTS[0])
+    if starts not in SWEEP_STARTS:
+        raise SolveError(f"problem {problem.name!r}, [options] sweep_starts must be one of {SWEEP_STARTS}, "
+                         f"got {starts!r}")
 
 
 def settings_from_problem(problem, tube: float, hessian: str | None) -> JumpSettings:
@@ -545,10 +550,7 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     wkey = (key, json.dumps({k: v for k, v in asdict(s).items() if k not in ("tube", "print_level")}, sort_keys=True))
     prev = _WARM.get(wkey)
     warm = prev is not None and prev[0] <= delta
-    starts = o.get("sweep_starts", "warm+cold")
-    if starts not in SWEEP_STARTS:
-        raise SolveError(f"problem {problem.name!r}, [options] sweep_starts must be one of {SWEEP_STARTS}, "
-                         f"got {starts!r}")
+    starts = o.get("sweep_starts", SWEEP_STARTS[0])
     out = solve_broad_jump(js, s, x0=prev[1] if warm else None, duals=prev[2] if warm else None)
     if out["result"]["warm_start"] and (starts == "warm+cold" or not out["result"]["success"]):
         # a warm start can end in a worse local optimum than a cold one: 1500 iterations and

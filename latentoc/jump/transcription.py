@@ -580,13 +580,18 @@ def _node_rows(name: str, u: ca.SX, parts: dict) -> tuple[NodeRows, dict[str, sl
     return NodeRows.from_expression(name, u, ca.vertcat(*[ca.vec(e) for e in parts.values()]), lazy=True), layout
 
 
-def _flight_base(rm: RowModel, x, xd, xdd, p, L, c_to, cd_to, tt):
-    """Ballistic base (b, bd, bdd) at flight time tt (:mod:`.flight`) for pitch p, momentum L."""
+def _ballistic_com(c_to, cd_to, tt):
+    """COM position and velocity (x, z) at flight time tt from the takeoff state."""
+    g = ca.DM(GRAVITY)
+    return c_to + cd_to * tt + 0.5 * g * tt ** 2, cd_to + g * tt
+
+
+def _flight_base(rm: RowModel, x, xd, xdd, p, L, c, cd):
+    """Base (b, bd, bdd) of the flight (:mod:`.flight`) for pitch p, momentum L and the COM at
+    c with velocity cd, accelerating at g."""
     fns = flight_functions(rm.sym, rm.smap, rm.gpdm)
     pd, pdd = fns["pitch_rate"](x, xd, xdd, L)
-    g = ca.DM(GRAVITY)
-    c = c_to + cd_to * tt + 0.5 * g * tt ** 2
-    return fns["base"](x, xd, xdd, p, pd, pdd, c, cd_to + g * tt, g)
+    return fns["base"](x, xd, xdd, p, pd, pdd, c, cd, ca.DM(GRAVITY))
 
 
 def flight_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
@@ -598,14 +603,11 @@ def flight_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     p, L, c_to, cd_to, tt = u[3 * d], u[3 * d + 1], u[3 * d + 2:3 * d + 4], u[3 * d + 4:3 * d + 6], u[3 * d + 6]
     # the motion about the COM (:func:`_galilean`): COM at the origin at rest, accelerating at g;
     # the COM's ballistic position c(t) moves the points
-    fns = flight_functions(rm.sym, rm.smap, rm.gpdm)
-    pd, pdd = fns["pitch_rate"](x, xd, xdd, L)
-    g = ca.DM(GRAVITY)
-    b, bd, bdd = fns["base"](x, xd, xdd, p, pd, pdd, ca.DM.zeros(2), ca.DM.zeros(2), g)
+    b, bd, bdd = _flight_base(rm, x, xd, xdd, p, L, ca.DM.zeros(2), ca.DM.zeros(2))
     _, qj, vj, aj = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
     q, v, a = _configuration(b, bd, bdd, qj, vj, aj)
     tau = rm.sym.rnea(q, v, a)
-    P = _world_points(rm, q, c_to + cd_to * tt + 0.5 * g * tt ** 2)
+    P = _world_points(rm, q, _ballistic_com(c_to, cd_to, tt)[0])
     return _node_rows("jump_flight_node", u, {"torque": rm.torque_rows(tau[6:]), "flight_clearance": P[2, :].T})
 
 
@@ -638,7 +640,7 @@ def touchdown_rows(rm: RowModel) -> tuple[NodeRows, dict[str, slice]]:
     o = 3 * d + nb
     p, L, c_to, cd_to, tt = u[o], u[o + 1], u[o + 2:o + 4], u[o + 4:o + 6], u[o + 6]
     imp = u[o + 7:]
-    bm, bdm, _ = _flight_base(rm, x, xd, xdd, p, L, c_to, cd_to, tt)
+    bm, bdm, _ = _flight_base(rm, x, xd, xdd, p, L, *_ballistic_com(c_to, cd_to, tt))
     bp, bdp, _, _ = _contact_base(rm, u)
     _, qj, _, _ = _joint_motion(rm.gpdm, rm.smap, x, xd, xdd)
     z3 = ca.DM.zeros(3)
