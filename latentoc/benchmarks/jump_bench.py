@@ -25,6 +25,10 @@ durations, exact Hessian):
   141, 156); per iteration the Hessian 0.25 s, the Jacobian 0.10 s, the linear solves 0.12 s.
   The sweep (``sweep_starts = "warm+cold"``): warm solves 14-24 s (35-59 iterations) but 52 s at
   delta 0.01, cold ones 52-97 s.
+* Another 2-core machine (AMD EPYC, 2026-12-02), the same version: the first ``solve broad-jump
+  --tube 0.02`` on the machine 22 min (21 min of it building and compiling the blocks), then
+  46 s (phase 1 36 iterations in 6.7 s, phase 2 141 in 39 s); ``sweep broad-jump`` 6 min 26 s,
+  the same iterations and distances as above, cold solves 34-62 s, warm ones 7-22 s.
 * Tried and not kept, phase 2 from the same phase-1 point at delta 0.005 (140 iterations, 82 s):
   ``mu_init`` 1e-3 to 1e-5 with small bound pushes, 140-143 iterations; MUMPS without scaling, or
   with scaling 8, 141 and 132 iterations in 80 s; SPRAL as the linear solver, 135 iterations in

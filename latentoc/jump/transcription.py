@@ -245,6 +245,13 @@ Measured history (issue 6; 2 shared cores; L-BFGS; tube 0.02 unless stated):
   between phase 1 and phase 2 (72 and 86 iterations; 101 s and 109 s in all at delta 0.005 and
   0.02, against 104 s and 80 s); the tube Hessian in closed form (K^-1 products, 232k
   instructions against CasADi's 220k, the same 37-44 ms for the 259 points).
+* phase 2 from the same phase-1 point (another 2-core machine, 0.2-0.3 s per iteration), delta
+  0.005, 0.02, 0.08, default settings 186, 141, 156 iterations (1.0082, 1.0309, 1.0317 m):
+  ``adaptive_mu_globalization kkt-error`` 98, 172, 117 (1.0081, 1.0309, 1.0302 m); bound and slack
+  pushes of 1e-6 (the point is feasible but for the wrench samples, whose rows start 0.13
+  violated) 129 and 164 at 0.005 and 0.02; phase 1's multipliers as Ipopt's warm start (the
+  wrench samples' at 0, :data:`WARM_START_OPTIONS`) 165 and 185, 1.0061 m at 0.005.  Each
+  setting moves the count by up to 40 % either way from tube to tube; none is kept.
 """
 from __future__ import annotations
 
