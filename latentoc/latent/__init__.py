@@ -1,0 +1,4 @@
+"""The latent motion: the B-spline path (Eq. 20, 23-25) and the GP layer on it (Eq. 18-19, 26-28)."""
+from .gp_layer import GPLayer, IdentityLayer, LatentMotion
+
+__all__ = ["GPLayer", "IdentityLayer", "LatentMotion"]

@@ -1,0 +1,169 @@
+"""Robot blocks: the rows of one row family at one node, a Function of robot quantities only.
+
+A block's rows are an SX Function ``F(y, yd, ydd, r)`` of the joint motion (y, yd, ydd: D
+each, the GP layer's outputs) and the node's other inputs r (base state, contact forces,
+phase data, ...). The NLP sees a node through its local inputs s = (dx, dxd, dxdd, dr): the
+latent point's tangents (3d) and r. With the GP layer's tangents G0, G1, G2
+(:mod:`latentoc.latent.gp_layer`) the joint motion moves as
+
+    dy = G0 dx,   dyd = G1 dx + G0 dxd,   dydd = G2 dx + 2 G1 dxd + G0 dxdd,
+
+so each block is compiled as three small Functions, mapped over its nodes:
+
+* ``rows``: (y, yd, ydd, r) -> F
+* ``jac``: (y, yd, ydd, r, G0, G1, G2) -> (F, dF/ds)
+* ``hess``: (y, yd, ydd, r, G0, G1, G2, l) -> (d2(l . F)/ds2 with the GP curvature left out,
+  d(l . F)/d(y, yd, ydd)), the second output for the GP layer's curvature term.
+
+Their size depends on the robot and the row definition, not on the GPDM: they are cached on
+disk keyed by the serialized rows and d, so a new GPDM, tube, motion or node count reuses them.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from . import jit
+
+__all__ = ["RobotBlock", "block_inputs", "compile_blocks"]
+
+# bump when the derivative Functions made from the same rows change: the cache index keys on it
+BLOCK_VERSION = "1"
+
+
+def block_inputs(D: int, n_extra: int) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+    """SX symbols (y, yd, ydd, r) for a block's rows."""
+    return ca.SX.sym("y", D), ca.SX.sym("yd", D), ca.SX.sym("ydd", D), ca.SX.sym("r", n_extra)
+
+
+@dataclass
+class RobotBlock:
+    """One row family's node Function and its compiled derivative pieces (module doc)."""
+
+    name: str
+    rows_sx: ca.Function  # (y, yd, ydd, r) -> F, SX
+    latent_dim: int
+    layout: dict[str, slice] = field(default_factory=dict)  # named row ranges of F
+    functions: dict[str, ca.Function] = field(default_factory=dict, repr=False)
+    _maps: dict = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def from_parts(cls, name: str, inputs: tuple[ca.SX, ca.SX, ca.SX, ca.SX], parts: dict[str, ca.SX],
+                   latent_dim: int) -> "RobotBlock":
+        """A block whose rows are the named ``parts`` stacked in order."""
+        layout, off = {}, 0
+        for key, e in parts.items():
+            layout[key] = slice(off, off + e.numel())
+            off += e.numel()
+        F = ca.vertcat(*[ca.vec(e) for e in parts.values()])
+        fn = ca.Function(name, list(inputs), [F], ["y", "yd", "ydd", "r"], ["F"])
+        return cls(name, fn, int(latent_dim), layout)
+
+    @property
+    def output_dim(self) -> int:
+        return self.rows_sx.nnz_in(0)
+
+    @property
+    def n_extra(self) -> int:
+        return self.rows_sx.nnz_in(3)
+
+    @property
+    def n_out(self) -> int:
+        return self.rows_sx.nnz_out(0)
+
+    @property
+    def n_local(self) -> int:
+        return 3 * self.latent_dim + self.n_extra
+
+    def derivative_functions(self) -> dict[str, ca.Function]:
+        """The SX Functions ``rows``, ``jac`` and ``hess`` (module doc)."""
+        D, d, nr, name = self.output_dim, self.latent_dim, self.n_extra, self.name
+        y, yd, ydd, r = block_inputs(D, nr)
+        G = [ca.SX.sym(f"G{i}", D, d) for i in range(3)]
+        s = ca.SX.sym("s", self.n_local)
+        sx, sv, sa, sr = s[:d], s[d:2 * d], s[2 * d:3 * d], s[3 * d:]
+        lin = (y + G[0] @ sx, yd + G[1] @ sx + G[0] @ sv, ydd + G[2] @ sx + 2 * G[1] @ sv + G[0] @ sa, r + sr)
+        F_lin = self.rows_sx(*lin)
+        zero = ca.DM.zeros(s.shape)
+        F = self.rows_sx(y, yd, ydd, r)
+        lam = ca.SX.sym("l", self.n_out)
+        J = ca.substitute(ca.jacobian(F_lin, s), s, zero)
+        H = ca.substitute(ca.hessian(ca.dot(lam, F_lin), s)[0], s, zero)
+        mu = ca.gradient(ca.dot(lam, F), ca.vertcat(y, yd, ydd))
+        ins = [y, yd, ydd, r]
+        names = ["y", "yd", "ydd", "r"]
+        return {"rows": ca.Function(name, ins, [ca.cse(F)], names, ["F"]),
+                "jac": ca.Function(f"{name}_jac", ins + G, ca.cse([F, J]), names + ["G0", "G1", "G2"], ["F", "J"]),
+                "hess": ca.Function(f"{name}_hess", ins + G + [lam], ca.cse([H, mu]),
+                                    names + ["G0", "G1", "G2", "l"], ["H", "mu"])}
+
+    def mapped(self, which: str, K: int) -> ca.Function:
+        key = (which, K)
+        if key not in self._maps:
+            self._maps[key] = jit.node_map(self.functions[which], K)
+        return self._maps[key]
+
+
+def _index_file(block: RobotBlock) -> Path:
+    key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, ca.__version__,
+                     str(jit.compiler()), *jit.JIT_FLAGS])
+    return jit.cache_dir() / f"rb_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
+
+
+def _load(block: RobotBlock, libs: list[str]) -> dict[str, ca.Function]:
+    names = {"rows": block.name, "jac": f"{block.name}_jac", "hess": f"{block.name}_hess"}
+    return {k: ca.external(n, lib) for (k, n), lib in zip(names.items(), libs)}
+
+
+def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
+    """Give each block its ``rows``, ``jac`` and ``hess`` Functions: compiled C from the disk
+    cache, else generated and compiled now (a progress bar over the libraries), else (no
+    compiler, ``LATENTOC_JIT=0``) CasADi's SX Functions."""
+    todo = []
+    for b in blocks:
+        if b.functions:
+            continue
+        if not jit.enabled():
+            b.functions = b.derivative_functions()
+            continue
+        try:
+            libs = json.loads(_index_file(b).read_text())["libraries"]
+            if len(libs) == 3 and all(Path(p).exists() for p in libs):
+                b.functions = _load(b, libs)
+                continue
+        except (OSError, ValueError, KeyError, TypeError):
+            pass
+        todo.append(b)
+    if not todo:
+        return blocks
+    fns, sources = {}, []
+    for b in todo:
+        fns[b.name] = b.derivative_functions()
+        for key, f in fns[b.name].items():
+            gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+            gen.add(f)
+            sources.append((f.name(), gen.dump()))
+    libs = jit.compile_sources(sources)
+    for i, b in enumerate(todo):
+        mine = libs[3 * i:3 * i + 3]
+        if any(lib is None for lib in mine):
+            b.functions = fns[b.name]
+            continue
+        index = _index_file(b)
+        tmp = index.with_name(f".{index.name}.{os.getpid()}")
+        tmp.write_text(json.dumps({"block": b.name, "libraries": [str(p) for p in mine]}))
+        os.replace(tmp, index)
+        b.functions = _load(b, [str(p) for p in mine])
+    return blocks
+
+
+def stack_tangents(G: np.ndarray) -> np.ndarray:
+    """K x D x d tangents as the D x (K d) matrix a mapped block takes."""
+    K, D, d = G.shape
+    return np.ascontiguousarray(np.transpose(G, (1, 0, 2)).reshape(D, K * d))

@@ -1,0 +1,190 @@
+"""The one Ipopt path: a :class:`~latentoc.nlp.assemble.SparseNLP` solved by CasADi's Ipopt.
+
+The NLP's objective, constraints, gradient, Jacobian and exact Hessian are handed to
+``casadi.nlpsol`` as callbacks (numpy on the Python side, compiled robot blocks inside), so
+Ipopt gets every derivative from the assembled layers. A progress bar shows the iterations,
+the objective and the constraint violation. Warm starts are explicit: the previous solve's
+primal point and multipliers are arguments, never module state.
+"""
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import casadi as ca
+import numpy as np
+
+from ..progress import bar
+from .assemble import SparseNLP
+
+__all__ = ["IpoptResult", "solve", "load_ipopt", "DEFAULT_OPTIONS", "WARM_START_OPTIONS"]
+
+DEFAULT_OPTIONS = {"tol": 1e-8, "max_iter": 3000, "mu_strategy": "adaptive", "print_level": 0, "sb": "yes"}
+# a warm start from a neighbouring optimum: its point and multipliers pushed only 1e-5 off their bounds
+WARM_START_OPTIONS = {"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-5,
+                      "warm_start_mult_bound_push": 1e-5, "warm_start_slack_bound_push": 1e-5}
+
+
+@dataclass
+class IpoptResult:
+    """The outcome of one Ipopt run."""
+
+    x: np.ndarray
+    f: float
+    g: np.ndarray
+    lam_g: np.ndarray
+    lam_x: np.ndarray
+    status: str
+    success: bool
+    iterations: int
+    time_s: float
+    timings: dict[str, float] = field(default_factory=dict)  # wall seconds per callback kind
+
+    def multipliers(self) -> dict[str, np.ndarray]:
+        """The point and multipliers a warm start of a neighbouring problem takes."""
+        return {"x0": self.x, "lam_g0": self.lam_g, "lam_x0": self.lam_x}
+
+
+_IPOPT_LOADED = False
+
+
+def load_ipopt() -> None:
+    """Load CasADi's Ipopt plugin, with the OpenBLAS it brings (under MUMPS) on one thread unless
+    ``$OPENBLAS_NUM_THREADS`` is set: its spinning workers slowed the threaded node evaluations."""
+    global _IPOPT_LOADED
+    if _IPOPT_LOADED:
+        return
+    unset = "OPENBLAS_NUM_THREADS" not in os.environ
+    if unset:
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    try:
+        ca.load_nlpsol("ipopt")
+    finally:
+        if unset:
+            del os.environ["OPENBLAS_NUM_THREADS"]
+    _IPOPT_LOADED = True
+
+
+class _Callback(ca.Callback):
+    def __init__(self, name: str, fn: Callable, ins: list[tuple[str, ca.Sparsity]], outs: list[tuple[str, ca.Sparsity]],
+                 timings: dict[str, float]):
+        ca.Callback.__init__(self)
+        self._fn, self._ins, self._outs, self._timings = fn, ins, outs, timings
+        # finite differences only so that CasADi can build (never call) derivative Functions
+        self.construct(name, {"enable_fd": True})
+
+    def get_n_in(self):
+        return len(self._ins)
+
+    def get_n_out(self):
+        return len(self._outs)
+
+    def get_name_in(self, i):
+        return self._ins[i][0]
+
+    def get_name_out(self, i):
+        return self._outs[i][0]
+
+    def get_sparsity_in(self, i):
+        return self._ins[i][1]
+
+    def get_sparsity_out(self, i):
+        return self._outs[i][1]
+
+    def eval(self, args):
+        t0 = time.perf_counter()
+        out = self._fn(*[np.asarray(a.full() if hasattr(a, "full") else a, float).ravel() for a in args])
+        self._timings[self.name()] = self._timings.get(self.name(), 0.0) + time.perf_counter() - t0
+        return [ca.DM(sp, np.atleast_1d(np.asarray(v, float)).ravel()) for v, (_, sp) in zip(out, self._outs)]
+
+
+class _Progress(ca.Callback):
+    """Ipopt's iterations on a progress bar: objective and constraint violation."""
+
+    def __init__(self, n: int, m: int, lbg: np.ndarray, ubg: np.ndarray, desc: str, max_iter: int):
+        ca.Callback.__init__(self)
+        self.n, self.m, self.lbg, self.ubg = n, m, lbg, ubg
+        self.bar = bar(total=max_iter, desc=desc, unit="it")
+        self.construct("ipopt_progress", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name in ("f",):
+            return ca.Sparsity.dense(1)
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.n)
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.m)
+        return ca.Sparsity.dense(0)
+
+    def eval(self, args):
+        g = np.asarray(args[ca.nlpsol_out().index("g")]).ravel()
+        viol = float(np.max(np.concatenate([[0.0], self.lbg - g, g - self.ubg]))) if g.size else 0.0
+        self.bar.update(1)
+        self.bar.set_postfix(f=f"{float(args[ca.nlpsol_out().index('f')]):.6g}", viol=f"{viol:.1e}")
+        return [0]
+
+
+def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg: np.ndarray, ubg: np.ndarray,
+          options: dict | None = None, warm: dict[str, np.ndarray] | None = None, desc: str = "ipopt") -> IpoptResult:
+    """Run Ipopt on ``nlp`` from ``x0``. ``options`` are Ipopt's (over :data:`DEFAULT_OPTIONS`);
+    ``warm`` = :meth:`IpoptResult.multipliers` of a neighbouring solve starts from its
+    multipliers too (:data:`WARM_START_OPTIONS`)."""
+    load_ipopt()
+    n, m = nlp.n_w, nlp.m
+    timings: dict[str, float] = {}
+    dense = ca.Sparsity.dense
+    xin = [("x", dense(n)), ("p", dense(0))]
+    cbs = {
+        "f": _Callback("nlp_f", lambda w, p: [nlp.objective(w)], xin, [("f", dense(1))], timings),
+        "g": _Callback("nlp_g", lambda w, p: [nlp.constraints(w)], xin, [("g", dense(m))], timings),
+        "grad_f": _Callback("nlp_grad_f", lambda w, p: [nlp.objective(w), nlp.gradient(w)], xin,
+                            [("f", dense(1)), ("grad_f_x", dense(n))], timings),
+        "jac_g": _Callback("nlp_jac_g", lambda w, p: [nlp.constraints(w), nlp.jacobian(w)], xin,
+                           [("g", dense(m)), ("jac_g_x", nlp.jac_sparsity)], timings),
+        "hess_lag": _Callback("nlp_hess_l", lambda w, p, lf, lg: [nlp.hessian(w, float(lf[0]), lg)],
+                              xin + [("lam_f", dense(1)), ("lam_g", dense(m))],
+                              [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings),
+    }
+    ipopt = {**DEFAULT_OPTIONS, **(options or {})}
+    if warm is not None:
+        ipopt = {**ipopt, **WARM_START_OPTIONS, **(options or {})}
+    max_iter = int(ipopt["max_iter"])
+    progress = _Progress(n, m, np.asarray(lbg, float), np.asarray(ubg, float), desc, max_iter)
+    w = ca.MX.sym("w", n)
+    p = ca.MX.sym("p", 0)
+    problem = {"x": w, "f": cbs["f"](w, p), "g": cbs["g"](w, p)}
+    opts = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "calc_lam_p": False,
+            "grad_f": cbs["grad_f"], "jac_g": cbs["jac_g"], "hess_lag": cbs["hess_lag"],
+            "iteration_callback": progress}
+    solver = ca.nlpsol("latentoc_ipopt", "ipopt", problem, opts)
+    args = {"x0": x0, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
+    if warm is not None:
+        args.update({"lam_g0": warm["lam_g0"], "lam_x0": warm["lam_x0"]})
+    t0 = time.perf_counter()
+    try:
+        sol = solver(**args)
+    finally:
+        progress.bar.close()
+    elapsed = time.perf_counter() - t0
+    stats = solver.stats()
+    status = str(stats.get("return_status", "unknown"))
+    success = bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level"
+    return IpoptResult(x=np.asarray(sol["x"]).ravel(), f=float(sol["f"]), g=np.asarray(sol["g"]).ravel(),
+                       lam_g=np.asarray(sol["lam_g"]).ravel(), lam_x=np.asarray(sol["lam_x"]).ravel(),
+                       status=status, success=success, iterations=int(stats.get("iter_count", -1)),
+                       time_s=elapsed, timings=timings)
