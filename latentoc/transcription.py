@@ -67,7 +67,9 @@ from .dynamics import SymbolicModel
 from .gpdm import GPDM
 from .latent_motion import (gp_grid_derivatives, gp_grid_function, joint_node_function, latent_motion_grid,
                             node_derivative_functions)
+from .kinds.min_torque import torque_limit_vector
 from .spline import BSpline
+from .spline_path import constraint_times, fit_control_points, fixed_rows, gauss_legendre_nodes, trapezoid_cost
 
 __all__ = ["SplineNLP", "TranscriptionSettings", "build_latent_nlp", "fixed_rows", "node_objective_functions",
            "fit_control_points", "gauss_legendre_nodes", "constraint_times", "trapezoid_cost"]
@@ -131,56 +133,6 @@ class SplineNLP:
         return P
 
 
-def fixed_rows(m: int, boundary: str) -> list[int]:
-    """Rows of P held fixed: [0, m-1] for "pose", [0, 1, m-2, m-1] for "rest"."""
-    if boundary == "pose":
-        return [0, m - 1]
-    if boundary == "rest":
-        if m < 5:
-            raise ValueError(f'boundary "rest" fixes 4 control points and needs m >= 5, got m = {m}')
-        return [0, 1, m - 2, m - 1]
-    raise ValueError(f'boundary must be "rest" or "pose", got {boundary!r}')
-
-
-def fit_control_points(spline: BSpline, t: np.ndarray, X: np.ndarray, boundary: str) -> np.ndarray:
-    """Least-squares control points of samples X (n x k) at times t with the boundary rows
-    fixed to the first/last sample (so x(0) = X[0], x(T) = X[-1], and for "rest" zero end velocity)."""
-    X = np.asarray(X, dtype=float)
-    m = spline.n_control
-    fixed = fixed_rows(m, boundary)
-    P = np.zeros((m, X.shape[1]))
-    for i in fixed:
-        P[i] = X[0] if i < m // 2 else X[-1]
-    B = spline.basis(np.asarray(t, dtype=float))
-    free = [i for i in range(m) if i not in fixed]
-    rhs = X - B[:, fixed] @ P[fixed]
-    P[free] = np.linalg.lstsq(B[:, free], rhs, rcond=None)[0]
-    return P
-
-
-def gauss_legendre_nodes(spline: BSpline, points_per_interval: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre nodes and weights, ``points_per_interval`` in every knot interval."""
-    xi, wi = np.polynomial.legendre.leggauss(int(points_per_interval))
-    bp = spline.breakpoints
-    t, w = [], []
-    for a, b in zip(bp[:-1], bp[1:]):
-        t.append(0.5 * (b - a) * xi + 0.5 * (a + b))
-        w.append(0.5 * (b - a) * wi)
-    return np.concatenate(t), np.concatenate(w)
-
-
-def constraint_times(spline: BSpline, points_per_interval: int) -> np.ndarray:
-    """Even grid with ``points_per_interval`` steps per knot interval, end points excluded."""
-    n = (len(spline.breakpoints) - 1) * int(points_per_interval)
-    return np.linspace(0.0, spline.duration, n + 1)[1:-1]
-
-
-def trapezoid_cost(L: np.ndarray, dt: float) -> float:
-    """Trapezoid rule on an even grid of step dt (the paper's 0.001 s reference)."""
-    L = np.asarray(L, dtype=float)
-    return float(dt * (L.sum() - 0.5 * (L[0] + L[-1])))
-
-
 def _basis_constants(spline: BSpline, t: np.ndarray) -> tuple[ca.DM, ca.DM, ca.DM]:
     """Transposed basis matrices (m x K) so that X^T = P^T B^T."""
     return tuple(ca.DM(spline.basis(t, r).T) for r in (0, 1, 2))
@@ -197,17 +149,6 @@ def _symbolic_control_points(w: ca.MX, P_init: np.ndarray, free: np.ndarray) -> 
         else:
             rows.append(ca.DM(P_init[i:i + 1]))
     return ca.vertcat(*rows)
-
-
-def torque_limit_vector(torque_limits: list[float], nv: int) -> np.ndarray | None:
-    """Per-joint torque bounds from the problem's list ([] none, [s] all, or nv values)."""
-    if not torque_limits:
-        return None
-    if len(torque_limits) == 1:
-        return np.full(nv, float(torque_limits[0]))
-    if len(torque_limits) != nv:
-        raise ValueError(f"torque_limits has {len(torque_limits)} values, the model has {nv} joints")
-    return np.asarray(torque_limits, dtype=float)
 
 
 def affine_map(expr: ca.MX, w: ca.MX) -> tuple[ca.DM, ca.DM]:

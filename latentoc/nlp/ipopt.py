@@ -2,7 +2,8 @@
 
 The NLP's objective, constraints, gradient, Jacobian and exact Hessian are handed to
 ``casadi.nlpsol`` as callbacks (numpy on the Python side, compiled robot blocks inside), so
-Ipopt gets every derivative from the assembled layers. A progress bar shows the iterations,
+Ipopt gets every derivative from the assembled layers; with ``hessian="lbfgs"`` Ipopt's
+limited-memory quasi-Newton approximation replaces the Hessian (the paper used L-BFGS, Sect. 3.4). A progress bar shows the iterations,
 the objective and the constraint violation. Warm starts are explicit: the previous solve's
 primal point and multipliers are arguments, never module state.
 """
@@ -19,8 +20,9 @@ import numpy as np
 from ..progress import bar
 from .assemble import SparseNLP
 
-__all__ = ["IpoptResult", "solve", "load_ipopt", "DEFAULT_OPTIONS", "WARM_START_OPTIONS"]
+__all__ = ["IpoptResult", "solve", "load_ipopt", "HESSIANS", "DEFAULT_OPTIONS", "WARM_START_OPTIONS"]
 
+HESSIANS = ("exact", "lbfgs")
 DEFAULT_OPTIONS = {"tol": 1e-8, "max_iter": 3000, "mu_strategy": "adaptive", "print_level": 0, "sb": "yes"}
 # a warm start from a neighbouring optimum: its point and multipliers pushed only 1e-5 off their bounds
 WARM_START_OPTIONS = {"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-5,
@@ -140,10 +142,13 @@ class _Progress(ca.Callback):
 
 
 def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg: np.ndarray, ubg: np.ndarray,
-          options: dict | None = None, warm: dict[str, np.ndarray] | None = None, desc: str = "ipopt") -> IpoptResult:
+          options: dict | None = None, warm: dict[str, np.ndarray] | None = None, desc: str = "ipopt",
+          hessian: str = "exact") -> IpoptResult:
     """Run Ipopt on ``nlp`` from ``x0``. ``options`` are Ipopt's (over :data:`DEFAULT_OPTIONS`);
     ``warm`` = :meth:`IpoptResult.multipliers` of a neighbouring solve starts from its
-    multipliers too (:data:`WARM_START_OPTIONS`)."""
+    multipliers too (:data:`WARM_START_OPTIONS`); ``hessian`` is one of :data:`HESSIANS`."""
+    if hessian not in HESSIANS:
+        raise ValueError(f"hessian must be one of {', '.join(HESSIANS)}, got {hessian!r}")
     load_ipopt()
     n, m = nlp.n_w, nlp.m
     timings: dict[str, float] = {}
@@ -156,21 +161,23 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
                             [("f", dense(1)), ("grad_f_x", dense(n))], timings),
         "jac_g": _Callback("nlp_jac_g", lambda w, p: [nlp.constraints(w), nlp.jacobian(w)], xin,
                            [("g", dense(m)), ("jac_g_x", nlp.jac_sparsity)], timings),
-        "hess_lag": _Callback("nlp_hess_l", lambda w, p, lf, lg: [nlp.hessian(w, float(lf[0]), lg)],
-                              xin + [("lam_f", dense(1)), ("lam_g", dense(m))],
-                              [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings),
     }
+    if hessian == "exact":
+        cbs["hess_lag"] = _Callback("nlp_hess_l", lambda w, p, lf, lg: [nlp.hessian(w, float(lf[0]), lg)],
+                                    xin + [("lam_f", dense(1)), ("lam_g", dense(m))],
+                                    [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings)
     ipopt = {**DEFAULT_OPTIONS, **(options or {})}
     if warm is not None:
         ipopt = {**ipopt, **WARM_START_OPTIONS, **(options or {})}
+    if hessian == "lbfgs":
+        ipopt["hessian_approximation"] = "limited-memory"
     max_iter = int(ipopt["max_iter"])
     progress = _Progress(n, m, np.asarray(lbg, float), np.asarray(ubg, float), desc, max_iter)
     w = ca.MX.sym("w", n)
     p = ca.MX.sym("p", 0)
     problem = {"x": w, "f": cbs["f"](w, p), "g": cbs["g"](w, p)}
     opts = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "calc_lam_p": False,
-            "grad_f": cbs["grad_f"], "jac_g": cbs["jac_g"], "hess_lag": cbs["hess_lag"],
-            "iteration_callback": progress}
+            "iteration_callback": progress, **{k: cbs[k] for k in ("grad_f", "jac_g", "hess_lag") if k in cbs}}
     solver = ca.nlpsol("latentoc_ipopt", "ipopt", problem, opts)
     args = {"x0": x0, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
     if warm is not None:

@@ -1,0 +1,231 @@
+"""Minimum-torque motion of a fixed-base robot (nq = nv = D): the NLP of Eq. 22 on the derivative layer.
+
+The objective is J = int_0^T |tau|^2 dt (Eq. 22 with the minimum-torque L of Sect. 4.1) by
+Gauss-Legendre quadrature, J = sum_k w_k |tau_k|^2, where tau_k = RNEA(y, yd, ydd) (Eq. 1-2) of
+the joint motion at node k. Two methods give the joint motion along a spline path
+(:mod:`latentoc.spline_path`):
+
+* ``"latent"``: the path is the latent spline x(t) (Eq. 20, 23-25) and the joint motion the
+  GPDM mean through it (Eq. 18, 26-28, :class:`~latentoc.latent.GPLayer`); the tube
+  sigma^2(x) <= delta (Eq. 19, 29) holds on the constraint grid;
+* ``"joint-range"``: the path is the joint spline itself (Eq. 5, :class:`~latentoc.latent.IdentityLayer`),
+  the full configuration-space baseline of Sect. 4.1.1; each free control point stays within
+  +-k degrees of its value in the fit of the training motion (Table 2, "joint range").
+
+Both hold the joint limits on the constraint grid and, if the problem gives torque limits,
+|tau| <= limit at the quadrature nodes. Each row family is one robot block
+(:mod:`latentoc.nlp.blocks`); with torque limits a single block gives (|tau|^2, tau), feeding
+both the objective and the torque rows, so RNEA runs once per node.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+import scipy.sparse as sp
+
+from ..dynamics import SymbolicModel
+from ..gpdm import GPDM
+from ..latent import GPLayer, IdentityLayer
+from ..nlp.assemble import Family, SparseNLP
+from ..nlp.blocks import RobotBlock, block_inputs
+from ..nlp.evaluators import BlockEvaluator, VarianceEvaluator
+from ..nlp.inputs import NodeInputs
+from ..spline import BSpline
+from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
+
+__all__ = ["METHODS", "MinTorqueSettings", "MinTorqueNLP", "latent_nlp", "joint_range_nlp", "torque_block",
+           "joint_position_block", "torque_limit_vector", "ipopt_options", "sampled_motion"]
+
+METHODS = ("latent", "joint-range")
+
+# The latent rows scaled to a largest gradient of 1 (Ipopt scales only rows above 100 by default):
+# the sigma^2 rows' gradients are ~1e-3. The joint-range NLP keeps Ipopt's default.
+LATENT_ROW_SCALING = {"nlp_scaling_constr_target_gradient": 1.0}
+
+
+@dataclass(frozen=True)
+class MinTorqueSettings:
+    """The transcription: spline size and boundary, node densities per knot interval, limits."""
+
+    duration: float
+    control_points: int = 9
+    spline_degree: int = 3
+    boundary: str = "rest"
+    quadrature_points: int = 8
+    constraint_points: int = 24
+    joint_limits: bool = True
+    torque_limits: tuple[float, ...] = ()
+
+    @classmethod
+    def from_problem(cls, problem, control_points: int | None = None) -> "MinTorqueSettings":
+        """The settings a :class:`~latentoc.problem.Problem` declares (``control_points`` overrides m)."""
+        m = problem.control_points if control_points is None else control_points
+        return cls(duration=problem.duration, control_points=int(m), spline_degree=problem.spline_degree,
+                   boundary=problem.boundary, quadrature_points=problem.quadrature_points,
+                   constraint_points=problem.constraint_points, joint_limits=problem.joint_limits,
+                   torque_limits=tuple(problem.torque_limits))
+
+    def spline(self) -> BSpline:
+        return BSpline(self.control_points, self.duration, self.spline_degree)
+
+
+@dataclass
+class MinTorqueNLP:
+    """The assembled NLP over the free control points, its bounds and its nodes."""
+
+    method: str
+    nlp: SparseNLP
+    path: SplinePath
+    layer: GPLayer | IdentityLayer
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    quad_t: np.ndarray
+    quad_w: np.ndarray
+    grid_t: np.ndarray
+    rows: dict[str, slice] = field(default_factory=dict)  # constraint rows of each family
+
+    @property
+    def w0(self) -> np.ndarray:
+        return self.path.w0
+
+    def control_points(self, w: np.ndarray) -> np.ndarray:
+        return self.path.control_points(w)
+
+    def cost(self, w: np.ndarray) -> float:
+        """J (Eq. 22, quadrature) at the decision vector w."""
+        return self.nlp.objective(np.asarray(w, dtype=float))
+
+
+def torque_limit_vector(torque_limits, nv: int) -> np.ndarray | None:
+    """Per-joint torque bounds from the problem's list ([] none, [s] all, or nv values)."""
+    if len(torque_limits) == 0:
+        return None
+    if len(torque_limits) == 1:
+        return np.full(nv, float(torque_limits[0]))
+    if len(torque_limits) != nv:
+        raise ValueError(f"torque_limits has {len(torque_limits)} values, the model has {nv} joints")
+    return np.asarray(torque_limits, dtype=float)
+
+
+def torque_block(model: SymbolicModel, latent_dim: int, with_torques: bool = False) -> RobotBlock:
+    """The block L = |tau|^2 (Eq. 22, tau = RNEA, Eq. 1-2); ``with_torques``: rows (L, tau)."""
+    y, yd, ydd, r = block_inputs(model.nv, 0)
+    tau = model.rnea(y, yd, ydd)
+    parts = {"L": ca.sumsqr(tau), "tau": tau} if with_torques else {"L": ca.sumsqr(tau)}
+    name = "min_torque_L_tau" if with_torques else "min_torque_L"
+    return RobotBlock.from_parts(name, (y, yd, ydd, r), parts, latent_dim)
+
+
+def joint_position_block(D: int, latent_dim: int) -> RobotBlock:
+    """The block q = y (the joint-limit rows)."""
+    y, yd, ydd, r = block_inputs(D, 0)
+    return RobotBlock.from_parts("joint_position", (y, yd, ydd, r), {"q": y}, latent_dim)
+
+
+def _spline_inputs(path: SplinePath, t: np.ndarray, orders: int) -> tuple[sp.csr_matrix, np.ndarray]:
+    """(S, s0) of the path's value and first ``orders`` - 1 derivatives at times t (Eq. 23-25)."""
+    ni = NodeInputs(len(t), path.n_w)
+    ni.spline([path.spline.basis(t, r) for r in range(orders)], path.index, path.P_init)
+    return ni.build()
+
+
+def _torque_family(model: SymbolicModel, layer, path: SplinePath, t: np.ndarray, w: np.ndarray,
+                   tmax: np.ndarray | None) -> tuple[Family, np.ndarray, np.ndarray]:
+    """The objective's family (cf = quadrature weights on L) and, with limits, the torque rows."""
+    nv, K = model.nv, len(t)
+    block = torque_block(model, layer.latent_dim, with_torques=tmax is not None)
+    n_out = block.n_out
+    cf = np.zeros((K, n_out))
+    cf[:, 0] = w
+    Cg, lb, ub = None, np.zeros(0), np.zeros(0)
+    if tmax is not None:  # rows tau_k (node-major), outputs 1..nv of each node
+        rows = np.arange(K * nv)
+        cols = (rows // nv) * n_out + 1 + rows % nv
+        Cg = sp.csr_matrix((np.ones(K * nv), (rows, cols)), shape=(K * nv, K * n_out))
+        lb, ub = np.tile(-tmax, K), np.tile(tmax, K)
+    S, s0 = _spline_inputs(path, t, 3)
+    return Family("torque", BlockEvaluator(block, layer), S, s0, Cg=Cg, cf=cf.ravel()), lb, ub
+
+
+def _build(method: str, model: SymbolicModel, layer, settings: MinTorqueSettings, path: SplinePath,
+           lbx: np.ndarray, ubx: np.ndarray, tube: float | None) -> MinTorqueNLP:
+    if model.nq != model.nv or model.nv != layer.output_dim:
+        raise ValueError(f"the motion has {layer.output_dim} joint angles but the model has nq = {model.nq}, "
+                         f"nv = {model.nv}; the minimum-torque NLP needs nq = nv = D")
+    spline = path.spline
+    quad_t, quad_w = gauss_legendre_nodes(spline, settings.quadrature_points)
+    grid_t = constraint_times(spline, settings.constraint_points)
+    Kg, D = len(grid_t), layer.output_dim
+    families, lbg, ubg = [], [], []
+    if tube is not None:  # sigma^2(x(t_j)) <= delta (Eq. 29)
+        S, s0 = _spline_inputs(path, grid_t, 1)
+        families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(Kg, format="csr")))
+        lbg.append(np.full(Kg, -np.inf))
+        ubg.append(np.full(Kg, float(tube)))
+    if settings.joint_limits:
+        S, s0 = _spline_inputs(path, grid_t, 3)
+        block = BlockEvaluator(joint_position_block(D, layer.latent_dim), layer)
+        families.append(Family("joint_limits", block, S, s0, Cg=sp.identity(Kg * D, format="csr")))
+        lbg.append(np.tile(np.asarray(model.model.lowerPositionLimit, dtype=float), Kg))
+        ubg.append(np.tile(np.asarray(model.model.upperPositionLimit, dtype=float), Kg))
+    tmax = torque_limit_vector(settings.torque_limits, model.nv)
+    torque, lb, ub = _torque_family(model, layer, path, quad_t, quad_w, tmax)
+    families.append(torque)
+    lbg.append(lb)
+    ubg.append(ub)
+    nlp = SparseNLP(path.n_w, families)
+    rows = {f.name: slice(nlp.row_offset[f.name], nlp.row_offset[f.name] + f.n_rows)
+            for f in nlp.families if f.n_rows}
+    return MinTorqueNLP(method=method, nlp=nlp, path=path, layer=layer, lbx=lbx, ubx=ubx,
+                        lbg=np.concatenate(lbg), ubg=np.concatenate(ubg), quad_t=quad_t, quad_w=quad_w,
+                        grid_t=grid_t, rows=rows)
+
+
+def latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: MinTorqueSettings, tube: float,
+               path: SplinePath | None = None, t_train: np.ndarray | None = None) -> MinTorqueNLP:
+    """Eq. 22 over the latent control points, subject to the tube sigma^2 <= ``tube`` (Eq. 29).
+
+    ``path``: the latent spline with its initial control points; else the fit of the GPDM's
+    training latent path at the training times ``t_train``."""
+    if path is None:
+        path = SplinePath.fit(settings.spline(), t_train, gpdm.latent_trajectories()[0], settings.boundary)
+    n = path.n_w
+    return _build("latent", model, GPLayer(gpdm), settings, path, np.full(n, -np.inf), np.full(n, np.inf),
+                  float(tube))
+
+
+def joint_range_nlp(model: SymbolicModel, settings: MinTorqueSettings, t_train: np.ndarray, Q_train: np.ndarray,
+                    joint_range_deg: float) -> MinTorqueNLP:
+    """Eq. 4 (= Eq. 22 with q = x) over joint-space control points, each within
+    +-``joint_range_deg`` of the training motion's spline fit (Sect. 4.1.1)."""
+    path = SplinePath.fit(settings.spline(), t_train, Q_train, settings.boundary)
+    k = np.radians(float(joint_range_deg))
+    return _build("joint-range", model, IdentityLayer(model.nq), settings, path, path.w0 - k, path.w0 + k, None)
+
+
+def ipopt_options(nlp: MinTorqueNLP, *, tol: float, max_iter: int, verbose: bool = False) -> dict:
+    """Ipopt's options for this NLP: monotone barrier (Fiacco-McCormick), an acceptable level of
+    max(1e-6, 100 tol) for 10 iterations, and the latent row scaling."""
+    options = {"tol": float(tol), "max_iter": int(max_iter), "mu_strategy": "monotone",
+               "acceptable_tol": max(1e-6, 100.0 * float(tol)), "acceptable_iter": 10,
+               "print_level": 5 if verbose else 0}
+    if nlp.method == "latent":
+        options.update(LATENT_ROW_SCALING)
+    return options
+
+
+def sampled_motion(layer: GPLayer | IdentityLayer, robot: pin.Model, spline: BSpline, P: np.ndarray,
+                   t: np.ndarray) -> dict[str, np.ndarray]:
+    """q, v, a (Eq. 26-28 through ``layer``) along the path P at times t, tau from Pinocchio's
+    numeric RNEA and L = |tau|^2: arrays len(t) x nv (L: len(t))."""
+    Z = np.hstack([spline.evaluate(P, t, r) for r in range(3)])
+    m = layer.motion(Z)
+    data = robot.createData()
+    tau = np.array([np.array(pin.rnea(robot, data, q, v, a)) for q, v, a in zip(m.y, m.yd, m.ydd)])
+    return {"q": np.asarray(m.y), "v": np.asarray(m.yd), "a": np.asarray(m.ydd), "tau": tau,
+            "L": np.sum(tau * tau, axis=1)}
