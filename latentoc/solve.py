@@ -63,19 +63,17 @@ import numpy as np
 from . import __version__
 from .dynamics import SymbolicModel
 from .gpdm import GPDM, GPDMSettings, learn_gpdm
-from .joint_space import build_joint_nlp, joint_motion
-from .latent_motion import numeric_latent_motion
-from .problem import Problem, parse_tube, training_motion
+from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp, latent_nlp,
+                               sampled_motion)
+from .nlp import ipopt
+from .nlp.ipopt import HESSIANS, IpoptResult
+from .problem import TRAINING_MOTIONS, Problem, parse_tube, training_motion
 from .robots import load_robot
-from .solver import HESSIANS, build_solver, solve_nlp
-from .spline import BSpline
-from .transcription import (SplineNLP, TranscriptionSettings, build_latent_nlp, fit_control_points,
-                            fixed_rows, trapezoid_cost)
+from .spline_path import SplinePath, fixed_rows, trapezoid_cost
 
 __all__ = ["solve", "Solution", "SolveError", "SOLVERS", "KIND_MODULES", "solver_for",
            "problem_gpdm", "resolve_tube", "METHODS"]
 
-METHODS = ("latent", "joint-range")
 TRAJECTORY_RATE_HZ = 1000.0
 
 
@@ -173,14 +171,6 @@ def _check_common(problem: Problem, m: int, hessian: str, method: str) -> None:
                          f"so at least {n_fixed + 1} are needed to leave one free")
 
 
-def _settings(problem: Problem, m: int) -> TranscriptionSettings:
-    return TranscriptionSettings(duration=problem.duration, control_points=int(m),
-                                 spline_degree=problem.spline_degree, boundary=problem.boundary,
-                                 quadrature_points=problem.quadrature_points,
-                                 constraint_points=problem.constraint_points,
-                                 joint_limits=problem.joint_limits, torque_limits=list(problem.torque_limits))
-
-
 def _time_grid(duration: float) -> np.ndarray:
     return np.linspace(0.0, duration, int(round(duration * TRAJECTORY_RATE_HZ)) + 1)
 
@@ -196,18 +186,24 @@ def _base_result(problem: Problem, method: str, m: int, hessian: str) -> dict[st
             "latentoc_version": __version__, "casadi_version": ca.__version__}
 
 
-def _finish(result: dict, nlp: SplineNLP, res, cost_initial: float, motion: dict, motion_init_L: np.ndarray,
-            t: np.ndarray) -> None:
+def _finish(result: dict, nlp: MinTorqueNLP, res: IpoptResult, cost_initial: float, motion: dict,
+            motion_init_L: np.ndarray, t: np.ndarray) -> None:
     dt = float(t[1] - t[0])
     cost_fine = trapezoid_cost(motion["L"], dt)
     result.update({
         "status": res.status, "success": bool(res.success), "iterations": res.iterations,
-        "cost_initial": cost_initial, "cost": res.cost,
-        "performance_gain_pct": 100.0 * (cost_initial - res.cost) / cost_initial,
+        "cost_initial": cost_initial, "cost": res.f,
+        "performance_gain_pct": 100.0 * (cost_initial - res.f) / cost_initial,
         "cost_trapezoid_1ms": cost_fine, "cost_initial_trapezoid_1ms": trapezoid_cost(motion_init_L, dt),
-        "quadrature_error": abs(res.cost - cost_fine) / abs(cost_fine),
-        "solve_time_s": res.solve_time_s, "n_variables": int(nlp.w0.size), "n_constraints": int(nlp.lbg.size),
+        "quadrature_error": abs(res.f - cost_fine) / abs(cost_fine),
+        "solve_time_s": res.time_s, "n_variables": int(nlp.w0.size), "n_constraints": int(nlp.lbg.size),
     })
+
+
+def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, x0: np.ndarray, hessian: str, verbose: bool) -> IpoptResult:
+    options = ipopt_options(nlp, tol=problem.tol, max_iter=problem.max_iter, verbose=verbose)
+    return ipopt.solve(nlp.nlp, x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, options, hessian=hessian,
+                       desc=f"{problem.name} ({nlp.method})")
 
 
 def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None, latent_dim: int | None = None,
@@ -216,7 +212,8 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
                             gpdm: GPDM | None = None, verbose: bool = False,
                             initial_guess: np.ndarray | None = None) -> Solution:
     """Minimum-torque motion (L = |tau|^2) in the GPDM latent space or, with
-    ``method="joint-range"``, in the full configuration space (Sect. 4.1.1).
+    ``method="joint-range"``, in the full configuration space (Sect. 4.1.1);
+    the NLP is :mod:`latentoc.kinds.min_torque`'s.
 
     ``initial_guess``: latent control points (m x d) Ipopt starts from instead of the
     training fit (:func:`latentoc.sweep.sweep` passes the previous, smaller tube's optimum);
@@ -249,10 +246,11 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
     else:
         gp, gpdm_time = gpdm, 0.0
 
-    settings = _settings(problem, m)
+    settings = MinTorqueSettings.from_problem(problem, m)
     t = _time_grid(problem.duration)
-    spline = BSpline(int(m), problem.duration, problem.spline_degree)
-    P0 = fit_control_points(spline, t_train, gp.latent_trajectories()[0], problem.boundary)
+    spline = settings.spline()
+    path = SplinePath.fit(spline, t_train, gp.latent_trajectories()[0], problem.boundary)
+    P0 = path.P_init
     x0 = spline.evaluate(P0, t)
     tube_training = gp.tube_size()
     tube_initial = float(np.max(gp.variance(x0)))
@@ -263,22 +261,20 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
         raise SolveError(f"tube delta = {delta:.4g} is infeasible: the fixed start/end latent points already have "
                          f"sigma^2 = {end_s2:.4g}; the smallest feasible delta is {end_s2:.4g} "
                          f"({end_s2 / tube_reference:.3g}x of tube_training = {tube_reference:.4g})")
+    if initial_guess is not None and np.shape(initial_guess) != P0.shape:
+        raise SolveError(f"initial guess has shape {np.shape(initial_guess)}, the control points {P0.shape}")
 
     t0 = time.perf_counter()
-    nlp = build_latent_nlp(gp, sym, settings, delta, t_train)
-    solver = build_solver(nlp.nlp, hessian=hessian, max_iter=problem.max_iter, tol=problem.tol, verbose=verbose)
-    cost_fn = ca.Function("cost", [nlp.nlp["x"]], [nlp.nlp["f"]])
-    cost_initial = float(cost_fn(nlp.w0))
+    nlp = latent_nlp(gp, sym, settings, delta, path)
+    cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t0
-    if initial_guess is not None and np.shape(initial_guess) != nlp.P_init.shape:
-        raise SolveError(f"initial guess has shape {np.shape(initial_guess)}, the control points {nlp.P_init.shape}")
-    x_start = nlp.w0 if initial_guess is None else np.asarray(initial_guess, dtype=float)[nlp.free].ravel()
-    res = solve_nlp(solver, x_start, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg)
+    x_start = nlp.w0 if initial_guess is None else path.decision_vector(initial_guess)
+    res = _run_ipopt(problem, nlp, x_start, hessian, verbose)
 
     P = nlp.control_points(res.x)
-    x, xd, xdd = (spline.evaluate(P, t, r) for r in (0, 1, 2))
-    motion = numeric_latent_motion(gp, sym, x, xd, xdd)
-    init = numeric_latent_motion(gp, sym, x0, spline.evaluate(P0, t, 1), spline.evaluate(P0, t, 2))
+    x = spline.evaluate(P, t)
+    motion = sampled_motion(nlp.layer, robot, spline, P, t)
+    init = sampled_motion(nlp.layer, robot, spline, P0, t)
     sigma2 = gp.variance(x)
     result = _base_result(problem, "latent", m, hessian)
     result.update({"latent_dim": int(d), "n_training_frames": int(len(t_train)),
@@ -302,25 +298,23 @@ def _solve_joint_range(problem: Problem, robot, sym: SymbolicModel, m: int, hess
     k = problem.joint_range_deg if joint_range_deg is None else joint_range_deg
     if isinstance(k, bool) or not isinstance(k, (int, float, np.floating)) or not np.isfinite(k) or k <= 0:
         raise SolveError(f"joint range must be a positive number of degrees, got {k!r}")
-    from .problem import TRAINING_MOTIONS
     t_train, Q_train = TRAINING_MOTIONS[problem.training]()  # all frames: no GPDM here
-    settings = _settings(problem, m)
+    settings = MinTorqueSettings.from_problem(problem, m)
     t = _time_grid(problem.duration)
     t0 = time.perf_counter()
-    nlp = build_joint_nlp(sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k))
-    solver = build_solver(nlp.nlp, hessian=hessian, max_iter=problem.max_iter, tol=problem.tol, verbose=verbose)
-    cost_initial = float(ca.Function("cost", [nlp.nlp["x"]], [nlp.nlp["f"]])(nlp.w0))
+    nlp = joint_range_nlp(sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k))
+    cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t0
-    res = solve_nlp(solver, nlp.w0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg)
-    P = nlp.control_points(res.x)
-    motion = joint_motion(sym, nlp.spline, P, t)
-    init = joint_motion(sym, nlp.spline, nlp.P_init, t)
+    res = _run_ipopt(problem, nlp, nlp.w0, hessian, verbose)
+    P, P0, spline = nlp.control_points(res.x), nlp.path.P_init, nlp.path.spline
+    motion = sampled_motion(nlp.layer, robot, spline, P, t)
+    init = sampled_motion(nlp.layer, robot, spline, P0, t)
     result = _base_result(problem, "joint-range", m, hessian)
     result.update({"joint_range_deg": float(k), "n_training_frames": int(len(t_train)),
                    "build_time_s": build_time, "gpdm_time_s": 0.0, "max_tube_violation": None})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
-                  "P": P, "P_initial": nlp.P_init, "q_initial": init["q"], "model": np.str_(robot.saveToString())}
+                  "P": P, "P_initial": P0, "q_initial": init["q"], "model": np.str_(robot.saveToString())}
     return Solution(result=result, trajectory=trajectory)
 
 

@@ -43,6 +43,7 @@ class IpoptResult:
     iterations: int
     time_s: float
     timings: dict[str, float] = field(default_factory=dict)  # wall seconds per callback kind
+    calls: dict[str, int] = field(default_factory=dict)  # evaluations per callback kind
 
     def multipliers(self) -> dict[str, np.ndarray]:
         """The point and multipliers a warm start of a neighbouring problem takes."""
@@ -71,9 +72,9 @@ def load_ipopt() -> None:
 
 class _Callback(ca.Callback):
     def __init__(self, name: str, fn: Callable, ins: list[tuple[str, ca.Sparsity]], outs: list[tuple[str, ca.Sparsity]],
-                 timings: dict[str, float]):
+                 timings: dict[str, float], calls: dict[str, int]):
         ca.Callback.__init__(self)
-        self._fn, self._ins, self._outs, self._timings = fn, ins, outs, timings
+        self._fn, self._ins, self._outs, self._timings, self._calls = fn, ins, outs, timings, calls
         # finite differences only so that CasADi can build (never call) derivative Functions
         self.construct(name, {"enable_fd": True})
 
@@ -99,6 +100,7 @@ class _Callback(ca.Callback):
         t0 = time.perf_counter()
         out = self._fn(*[np.asarray(a.full() if hasattr(a, "full") else a, float).ravel() for a in args])
         self._timings[self.name()] = self._timings.get(self.name(), 0.0) + time.perf_counter() - t0
+        self._calls[self.name()] = self._calls.get(self.name(), 0) + 1
         return [ca.DM(sp, np.atleast_1d(np.asarray(v, float)).ravel()) for v, (_, sp) in zip(out, self._outs)]
 
 
@@ -152,20 +154,21 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
     load_ipopt()
     n, m = nlp.n_w, nlp.m
     timings: dict[str, float] = {}
+    calls: dict[str, int] = {}
     dense = ca.Sparsity.dense
     xin = [("x", dense(n)), ("p", dense(0))]
     cbs = {
-        "f": _Callback("nlp_f", lambda w, p: [nlp.objective(w)], xin, [("f", dense(1))], timings),
-        "g": _Callback("nlp_g", lambda w, p: [nlp.constraints(w)], xin, [("g", dense(m))], timings),
+        "f": _Callback("nlp_f", lambda w, p: [nlp.objective(w)], xin, [("f", dense(1))], timings, calls),
+        "g": _Callback("nlp_g", lambda w, p: [nlp.constraints(w)], xin, [("g", dense(m))], timings, calls),
         "grad_f": _Callback("nlp_grad_f", lambda w, p: [nlp.objective(w), nlp.gradient(w)], xin,
-                            [("f", dense(1)), ("grad_f_x", dense(n))], timings),
+                            [("f", dense(1)), ("grad_f_x", dense(n))], timings, calls),
         "jac_g": _Callback("nlp_jac_g", lambda w, p: [nlp.constraints(w), nlp.jacobian(w)], xin,
-                           [("g", dense(m)), ("jac_g_x", nlp.jac_sparsity)], timings),
+                           [("g", dense(m)), ("jac_g_x", nlp.jac_sparsity)], timings, calls),
     }
     if hessian == "exact":
         cbs["hess_lag"] = _Callback("nlp_hess_l", lambda w, p, lf, lg: [nlp.hessian(w, float(lf[0]), lg)],
                                     xin + [("lam_f", dense(1)), ("lam_g", dense(m))],
-                                    [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings)
+                                    [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings, calls)
     ipopt = {**DEFAULT_OPTIONS, **(options or {})}
     if warm is not None:
         ipopt = {**ipopt, **WARM_START_OPTIONS, **(options or {})}
@@ -194,4 +197,4 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
     return IpoptResult(x=np.asarray(sol["x"]).ravel(), f=float(sol["f"]), g=np.asarray(sol["g"]).ravel(),
                        lam_g=np.asarray(sol["lam_g"]).ravel(), lam_x=np.asarray(sol["lam_x"]).ravel(),
                        status=status, success=success, iterations=int(stats.get("iter_count", -1)),
-                       time_s=elapsed, timings=timings)
+                       time_s=elapsed, timings=timings, calls=calls)
