@@ -1,0 +1,105 @@
+"""The one Ipopt path (latentoc.nlp.ipopt.solve) on small problems with known optima."""
+import casadi as ca
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from latentoc.latent import IdentityLayer
+from latentoc.nlp import ipopt
+from latentoc.nlp.assemble import Family, SparseNLP
+from latentoc.nlp.blocks import RobotBlock, block_inputs
+from latentoc.nlp.evaluators import BlockEvaluator
+from latentoc.nlp.inputs import NodeInputs
+
+N = 4
+
+
+def _qp():
+    """min 1/2 |w - a|^2 s.t. A w = b and w_3 <= u (active): a linear family, objective terms."""
+    rng = np.random.default_rng(0)
+    a = rng.standard_normal(N)
+    A = rng.standard_normal((2, N))
+    b = rng.standard_normal(2)
+    w = ca.SX.sym("w", N)
+    terms = ca.Function("terms", [w], [0.5 * ca.sumsqr(w - a)])
+    lin = Family("equalities", None, sp.csr_matrix((0, N)), np.zeros(0), Cg=sp.csr_matrix((2, 0)),
+                 L=sp.csr_matrix(A), c=-b)
+    nlp = SparseNLP(N, [lin], objective_terms=terms)
+    # the optimum with w_3 fixed at its bound u, below the unconstrained optimum's w_3
+    w_free = a - A.T @ np.linalg.solve(A @ A.T, A @ a - b)
+    u = w_free[3] - 0.5
+    B = np.vstack([A, np.eye(N)[3]])  # active constraints: A w = b, w_3 = u
+    nu = np.linalg.solve(B @ B.T, B @ a - np.r_[b, u])
+    w_opt = a - B.T @ nu
+    ubx = np.full(N, np.inf)
+    ubx[3] = u
+    bounds = {"lbx": np.full(N, -np.inf), "ubx": ubx, "lbg": np.zeros(2), "ubg": np.zeros(2)}
+    return nlp, bounds, w_opt, nu
+
+
+def _circle(monkeypatch, tmp_path):
+    """min c . w s.t. |w|^2 <= 1 through a robot block at one node with the identity layer:
+    w* = -c / |c|, multiplier |c| / 2."""
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path / "jit"))
+    y, yd, ydd, r = block_inputs(N, 0)
+    block = RobotBlock.from_parts("circle", (y, yd, ydd, r), {"r2": ca.sumsqr(y)}, N)
+    ni = NodeInputs(1, N)
+    ni.variables(np.arange(N)[None, :])
+    ni.constant(np.zeros((1, 2 * N)))
+    S, s0 = ni.build()
+    fam = Family("circle", BlockEvaluator(block, IdentityLayer(N)), S, s0, Cg=sp.identity(1, format="csr"))
+    c = np.array([1.0, -2.0, 0.5, 2.0])
+    w = ca.SX.sym("w", N)
+    nlp = SparseNLP(N, [fam], objective_terms=ca.Function("terms", [w], [ca.dot(ca.DM(c), w)]))
+    bounds = {"lbx": np.full(N, -np.inf), "ubx": np.full(N, np.inf), "lbg": np.array([-np.inf]), "ubg": np.array([1.0])}
+    return nlp, bounds, -c / np.linalg.norm(c), np.linalg.norm(c) / 2
+
+
+def test_qp_optimum_and_multipliers():
+    nlp, bounds, w_opt, nu = _qp()
+    res = ipopt.solve(nlp, np.zeros(N), **bounds)
+    assert res.success and res.status == "Solve_Succeeded"
+    assert isinstance(res.iterations, int) and 0 < res.iterations < 50
+    np.testing.assert_allclose(res.x, w_opt, rtol=0, atol=1e-7)
+    B = np.vstack([nlp.families[0].L.toarray(), np.eye(N)[3]])
+    assert res.f == pytest.approx(0.5 * np.sum((B.T @ nu) ** 2), rel=1e-7)  # w* - a = -B^T nu
+    np.testing.assert_allclose(res.g, 0.0, atol=1e-8)
+    np.testing.assert_allclose(res.lam_g, nu[:2], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(res.lam_x, np.r_[0, 0, 0, nu[2]], rtol=0, atol=1e-6)
+    assert set(res.timings) >= {"nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l"}
+
+
+def test_nonlinear_constraint_through_a_block(monkeypatch, tmp_path):
+    nlp, bounds, w_opt, lam = _circle(monkeypatch, tmp_path)
+    res = ipopt.solve(nlp, np.full(N, 0.1), **bounds)
+    assert res.success, res.status
+    np.testing.assert_allclose(res.x, w_opt, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(res.lam_g, [lam], rtol=1e-6)
+    lb = ipopt.solve(nlp, np.full(N, 0.1), **bounds, hessian="lbfgs")
+    assert lb.success and "nlp_hess_l" not in lb.timings
+    np.testing.assert_allclose(lb.x, w_opt, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("case", ["qp", "circle"])
+def test_warm_start_from_own_multipliers(case, monkeypatch, tmp_path):
+    """Started at its own optimum and multipliers Ipopt stops in very few iterations."""
+    nlp, bounds, w_opt, _ = _qp() if case == "qp" else _circle(monkeypatch, tmp_path)
+    cold = ipopt.solve(nlp, np.full(N, 0.1), **bounds)
+    assert cold.success
+    warm = ipopt.solve(nlp, cold.x, **bounds, warm=cold.multipliers())
+    assert warm.success, warm.status
+    assert warm.iterations <= 2 and warm.iterations < cold.iterations
+    np.testing.assert_allclose(warm.x, w_opt, rtol=0, atol=1e-6)
+
+
+def test_iteration_limit_is_reported():
+    nlp, bounds, _, _ = _qp()
+    res = ipopt.solve(nlp, np.zeros(N), **bounds, options={"max_iter": 1})
+    assert not res.success
+    assert res.status == "Maximum_Iterations_Exceeded" and res.iterations == 1
+
+
+def test_unknown_hessian_is_refused():
+    nlp, bounds, _, _ = _qp()
+    with pytest.raises(ValueError, match="hessian"):
+        ipopt.solve(nlp, np.zeros(N), **bounds, hessian="newton")
