@@ -256,3 +256,55 @@ def test_node_inputs_constants_only():
     S, s0 = ni.build()
     assert S.shape == (6, 4) and S.nnz == 0
     np.testing.assert_array_equal(s0, np.arange(6.0))
+
+
+# ------------------------------------------------------------ linear rows without Cg
+_ROWS_FROM_CG_ONLY = ("nlp bug: Family.n_rows counts Cg's rows only, while the Jacobian pattern places L's rows "
+                      "at the family's row offset whatever Cg is: L (and c) without Cg are dropped from g or land "
+                      "in the next family's Jacobian rows")
+
+
+def _square_family(name: str, monkeypatch, tmp_path, **kw) -> Family:
+    """|w|^2 at one node (identity layer, w = x)."""
+    from latentoc.latent import IdentityLayer
+
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path / "jit"))
+    y, yd, ydd, r = block_inputs(3, 0)
+    block = RobotBlock.from_parts("assemble_square", (y, yd, ydd, r), {"s": ca.sumsqr(y)}, 3)
+    ni = NodeInputs(1, 3)
+    ni.variables(np.arange(3)[None, :])
+    ni.constant(np.zeros((1, 6)))
+    S, s0 = ni.build()
+    return Family(name, BlockEvaluator(block, IdentityLayer(3)), S, s0, **kw)
+
+
+@pytest.mark.xfail(strict=True, reason=_ROWS_FROM_CG_ONLY)
+def test_linear_family_without_evaluator():
+    """A family of linear rows only: g = A w + c, dg/dw = A."""
+    A, c = np.array([[1.0, 2.0, 0.0], [0.0, 1.0, -1.0]]), np.array([-1.0, -2.0])
+    lin = Family("linear", None, sp.csr_matrix((0, 3)), np.zeros(0), L=sp.csr_matrix(A), c=c)
+    nlp = SparseNLP(3, [lin])
+    w = np.array([0.3, -0.2, 0.5])
+    assert nlp.m == 2
+    np.testing.assert_allclose(nlp.constraints(w), A @ w + c)
+    np.testing.assert_allclose(ca.DM(nlp.jac_sparsity, nlp.jacobian(w)).full(), A)
+
+
+@pytest.mark.xfail(strict=True, reason=_ROWS_FROM_CG_ONLY)
+def test_jacobian_agrees_with_constraints_when_L_has_no_Cg(monkeypatch, tmp_path):
+    """An objective family with linear rows (L, c, no Cg) before a constraint family: the
+    Jacobian is the derivative of the constraints (it had 2 w + A in the second family's row)."""
+    A = np.array([[1.0, 2.0, 0.0]])
+    first = _square_family("objective", monkeypatch, tmp_path, L=sp.csr_matrix(A), c=np.array([-1.0]), cf=np.ones(1))
+    second = _square_family("square", monkeypatch, tmp_path, Cg=sp.identity(1, format="csr"))
+    nlp = SparseNLP(3, [first, second])
+    w, h = np.array([0.3, -0.2, 0.5]), 1e-6
+    fd = np.column_stack([(nlp.constraints(w + h * e) - nlp.constraints(w - h * e)) / (2 * h) for e in np.eye(3)])
+    np.testing.assert_allclose(ca.DM(nlp.jac_sparsity, nlp.jacobian(w)).full(), fd, rtol=0, atol=1e-8)
+
+
+@pytest.mark.xfail(strict=True, reason="nlp bug: a family's Cg, L and c row counts are not checked against each other")
+def test_mismatched_row_counts_are_refused(monkeypatch, tmp_path):
+    L = sp.csr_matrix(np.ones((2, 3)))
+    with pytest.raises(ValueError, match="square"):
+        SparseNLP(3, [_square_family("square", monkeypatch, tmp_path, Cg=sp.identity(1, format="csr"), L=L)])
