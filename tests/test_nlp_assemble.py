@@ -259,10 +259,6 @@ def test_node_inputs_constants_only():
 
 
 # ------------------------------------------------------------ linear rows without Cg
-_ROWS_FROM_CG_ONLY = ("nlp bug: Family.n_rows counts Cg's rows only, while the Jacobian pattern places L's rows "
-                      "at the family's row offset whatever Cg is: L (and c) without Cg are dropped from g or land "
-                      "in the next family's Jacobian rows")
-
 
 def _square_family(name: str, monkeypatch, tmp_path, **kw) -> Family:
     """|w|^2 at one node (identity layer, w = x)."""
@@ -278,7 +274,6 @@ def _square_family(name: str, monkeypatch, tmp_path, **kw) -> Family:
     return Family(name, BlockEvaluator(block, IdentityLayer(3)), S, s0, **kw)
 
 
-@pytest.mark.xfail(strict=True, reason=_ROWS_FROM_CG_ONLY)
 def test_linear_family_without_evaluator():
     """A family of linear rows only: g = A w + c, dg/dw = A."""
     A, c = np.array([[1.0, 2.0, 0.0], [0.0, 1.0, -1.0]]), np.array([-1.0, -2.0])
@@ -290,7 +285,6 @@ def test_linear_family_without_evaluator():
     np.testing.assert_allclose(ca.DM(nlp.jac_sparsity, nlp.jacobian(w)).full(), A)
 
 
-@pytest.mark.xfail(strict=True, reason=_ROWS_FROM_CG_ONLY)
 def test_jacobian_agrees_with_constraints_when_L_has_no_Cg(monkeypatch, tmp_path):
     """An objective family with linear rows (L, c, no Cg) before a constraint family: the
     Jacobian is the derivative of the constraints (it had 2 w + A in the second family's row)."""
@@ -303,7 +297,6 @@ def test_jacobian_agrees_with_constraints_when_L_has_no_Cg(monkeypatch, tmp_path
     np.testing.assert_allclose(ca.DM(nlp.jac_sparsity, nlp.jacobian(w)).full(), fd, rtol=0, atol=1e-8)
 
 
-@pytest.mark.xfail(strict=True, reason="nlp bug: a family's Cg, L and c row counts are not checked against each other")
 def test_mismatched_row_counts_are_refused(monkeypatch, tmp_path):
     L = sp.csr_matrix(np.ones((2, 3)))
     with pytest.raises(ValueError, match="square"):

@@ -45,9 +45,21 @@ class Family:
     cf: np.ndarray | None = None  # K n_out objective weights
     layout: dict[str, slice] = field(default_factory=dict)  # named row ranges of its constraint rows
 
+    def __post_init__(self) -> None:
+        counts = {k: m.shape[0] for k, m in (("Cg", self.Cg), ("L", self.L)) if m is not None}
+        if self.c is not None:
+            counts["c"] = np.size(self.c)
+        if len(set(counts.values())) > 1:
+            raise ValueError(f"family {self.name!r}: its row counts differ ({counts}); Cg, L and c must have "
+                             f"the same number of rows")
+
     @property
     def n_rows(self) -> int:
-        return 0 if self.Cg is None else self.Cg.shape[0]
+        """Constraint rows: those of Cg, else of L, else of c."""
+        for m in (self.Cg, self.L):
+            if m is not None:
+                return m.shape[0]
+        return 0 if self.c is None else int(np.size(self.c))
 
     @property
     def K(self) -> int:
@@ -239,7 +251,7 @@ class SparseNLP:
             if not f.n_rows:
                 continue
             g = np.zeros(f.n_rows)
-            if plan is not None:
+            if plan is not None and f.Cg is not None:
                 g += f.Cg @ F.ravel()
             if f.L is not None:
                 g += f.L @ w

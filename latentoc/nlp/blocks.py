@@ -29,6 +29,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from ..progress import bar
 from . import jit
 
 __all__ = ["RobotBlock", "block_inputs", "compile_blocks"]
@@ -112,7 +113,8 @@ class RobotBlock:
 
 def _index_file(block: RobotBlock) -> Path:
     key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, ca.__version__,
-                     str(jit.compiler()), *jit.JIT_FLAGS])
+                     str(jit.compiler()), *jit.JIT_FLAGS, *jit.LARGE_FLAGS,
+                     str(jit.LARGE_FUNCTION)])
     return jit.cache_dir() / f"rb_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
 
 
@@ -142,24 +144,25 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
         todo.append(b)
     if not todo:
         return blocks
-    fns, sources = {}, []
+    fns, futures = {}, {}
+    with jit.Compiler() as cc:
+        for b in bar(todo, desc="building the robot blocks' derivatives", unit="block"):
+            fns[b.name] = b.derivative_functions()
+            futures[b.name] = []
+            for f in fns[b.name].values():
+                gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+                gen.add(f)
+                futures[b.name].append(cc.submit(f.name(), gen.dump(), jit.flags_for(f)))
     for b in todo:
-        fns[b.name] = b.derivative_functions()
-        for key, f in fns[b.name].items():
-            gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
-            gen.add(f)
-            sources.append((f.name(), gen.dump()))
-    libs = jit.compile_sources(sources)
-    for i, b in enumerate(todo):
-        mine = libs[3 * i:3 * i + 3]
-        if any(lib is None for lib in mine):
+        libs = [f.result() for f in futures[b.name]]
+        if any(lib is None for lib in libs):
             b.functions = fns[b.name]
             continue
         index = _index_file(b)
         tmp = index.with_name(f".{index.name}.{os.getpid()}")
-        tmp.write_text(json.dumps({"block": b.name, "libraries": [str(p) for p in mine]}))
+        tmp.write_text(json.dumps({"block": b.name, "libraries": [str(p) for p in libs]}))
         os.replace(tmp, index)
-        b.functions = _load(b, [str(p) for p in mine])
+        b.functions = _load(b, [str(p) for p in libs])
     return blocks
 
 

@@ -13,7 +13,7 @@ import shutil
 import subprocess
 import tempfile
 import warnings
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import casadi as ca
@@ -21,9 +21,17 @@ import casadi as ca
 from ..errors import LatentocError
 from ..progress import bar
 
-__all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "compile_sources", "threads", "node_map"]
+__all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "threads", "node_map"]
 
 JIT_FLAGS = ("-O1",)
+# gcc's optimiser is superlinear on long straight-line code: past this size -O0 (docs/derivatives.md)
+LARGE_FUNCTION = 50_000
+LARGE_FLAGS = ("-O0",)
+
+
+def flags_for(f: ca.Function) -> tuple[str, ...]:
+    """Compiler flags for Function ``f``: -O1, or -O0 when it is large."""
+    return LARGE_FLAGS if f.n_instructions() > LARGE_FUNCTION else JIT_FLAGS
 
 
 def cache_dir() -> Path:
@@ -68,41 +76,57 @@ def library_path(source: str, flags: tuple[str, ...] = JIT_FLAGS) -> Path:
     return cache_dir() / f"lc_{key}.so"
 
 
-def compile_sources(sources: list[tuple[str, str]], flags: tuple[str, ...] = JIT_FLAGS,
-                    workers: int | None = None) -> list[Path | None]:
-    """Compile C sources ``(label, source)`` to shared libraries, ``workers`` at a time, with a
-    progress bar; a library already in the cache is not compiled again. None for a source that
-    could not be compiled (no compiler, or it failed: warning)."""
-    cc = compiler()
-    if cc is None:
-        warnings.warn("no C compiler found (set CC): evaluating the NLP Functions without JIT", stacklevel=3)
-        return [None] * len(sources)
-    paths = [library_path(src, flags) for _, src in sources]
-    todo = [i for i, p in enumerate(paths) if not p.exists()]
-    if not todo:
-        return list(paths)
-    cache = cache_dir()
-    cache.mkdir(parents=True, exist_ok=True)
+class Compiler:
+    """Compiles C sources to shared libraries in the background, ``workers`` at a time, while the
+    caller generates the next ones; a library already in the cache is not compiled again.
 
-    def build(i: int) -> Path | None:
-        lib = paths[i]
+    ``submit`` returns a Future of the library's path, or of None when the source could not be
+    compiled (no compiler, or it failed: warning). Use as a context manager: leaving it waits for
+    every library, with a progress bar."""
+
+    def __init__(self, workers: int | None = None):
+        self.cc = compiler()
+        self.pool = ThreadPoolExecutor(max_workers=workers or threads())
+        self.bar = bar(total=0, desc=f"compiling C libraries into {cache_dir()}", unit="lib")
+        self.futures: list = []
+        if self.cc is None:
+            warnings.warn("no C compiler found (set CC): evaluating the NLP Functions without JIT", stacklevel=3)
+
+    def __enter__(self) -> "Compiler":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for f in self.futures:
+            f.result()
+        self.pool.shutdown()
+        self.bar.close()
+
+    def submit(self, label: str, source: str, flags: tuple[str, ...]):
+        lib = library_path(source, flags)
+        if self.cc is None or lib.exists():
+            done: Future = Future()
+            done.set_result(None if self.cc is None else lib)
+            return done
+        self.bar.total += 1
+        self.bar.refresh()
+        fut = self.pool.submit(self._build, label, source, flags, lib)
+        self.futures.append(fut)
+        return fut
+
+    def _build(self, label: str, source: str, flags: tuple[str, ...], lib: Path) -> Path | None:
+        cache = cache_dir()
         try:
+            cache.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
                 c_file, so_file = Path(tmp) / f"{lib.stem}.c", Path(tmp) / lib.name
-                c_file.write_text(sources[i][1])
-                subprocess.run([cc, *flags, "-shared", "-fPIC", "-o", str(so_file), str(c_file), "-lm"],
+                c_file.write_text(source)
+                subprocess.run([self.cc, *flags, "-shared", "-fPIC", "-o", str(so_file), str(c_file), "-lm"],
                                check=True, capture_output=True, text=True)
                 os.replace(so_file, lib)  # atomic: readers see no library or a complete one
         except (OSError, subprocess.CalledProcessError) as exc:
             detail = getattr(exc, "stderr", "") or str(exc)
-            warnings.warn(f"compiling {sources[i][0]} failed ({detail.strip()[:200]}): evaluating without JIT",
-                          stacklevel=3)
+            warnings.warn(f"compiling {label} failed ({detail.strip()[:200]}): evaluating without JIT", stacklevel=3)
             return None
+        finally:
+            self.bar.update(1)
         return lib
-
-    with ThreadPoolExecutor(max_workers=workers or threads()) as pool, \
-            bar(total=len(todo), desc=f"compiling {len(todo)} C libraries into {cache}", unit="lib") as b:
-        for i, lib in zip(todo, pool.map(build, todo)):
-            paths[i] = lib
-            b.update(1)
-    return paths

@@ -1,0 +1,40 @@
+"""The broad jump's row families, one per module, each a robot block (:mod:`latentoc.nlp.blocks`):
+a Function of the joint motion (y, yd, ydd) and the node's other inputs r, never of the GPDM.
+
+* :mod:`.contact` - a contact node: base rows = sum J^T f, torques, foot placement, ZMP, COM;
+* :mod:`.wrench` - a sample between contact nodes: the needed wrench in the loaded points' cone;
+* :mod:`.flight` - a flight node (ballistic base) and the flight's pitch rate;
+* :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact.
+
+Each module has ``INPUTS`` (the names and sizes of r, in order) and ``block(robot, d)``.
+"""
+from __future__ import annotations
+
+import casadi as ca
+
+from ...nlp.blocks import RobotBlock, block_inputs
+from ..robot import JumpRobot
+
+__all__ = ["inputs", "row_blocks"]
+
+
+def inputs(robot: JumpRobot, spec: dict[str, int]) -> tuple[tuple[ca.SX, ca.SX, ca.SX, ca.SX], dict[str, ca.SX]]:
+    """Block symbols (y, yd, ydd, r) and r split by name as ``spec`` orders it."""
+    sym = block_inputs(robot.n_learned, sum(spec.values()))
+    r, parts, off = sym[3], {}, 0
+    for name, n in spec.items():
+        parts[name] = r[off:off + n]
+        off += n
+    return sym, parts
+
+
+def row_blocks(robot: JumpRobot, d: int, wrench_samples: bool = True) -> dict[str, RobotBlock]:
+    """Every row family's block for latent dimension d."""
+    from . import contact, flight, transitions, wrench
+
+    blocks = {"contact": contact.block(robot, d), "flight": flight.block(robot, d),
+              "pitch_rate": flight.pitch_rate_block(robot, d), "takeoff": transitions.takeoff_block(robot, d),
+              "touchdown": transitions.touchdown_block(robot, d)}
+    if wrench_samples:
+        blocks["wrench"] = wrench.block(robot, d)
+    return blocks

@@ -1,0 +1,32 @@
+"""The broad jump's settings (Table 5 and the discretisation), declared once with their defaults."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .contact import MU
+
+
+@dataclass
+class JumpSettings:
+    """What the transcription and the solve need; the problem file sets them (:mod:`.problem`)."""
+
+    tube: float = 0.02  # delta of Eq. 29 (units of sigma^2)
+    mu: float = MU  # friction coefficient
+    n_control: int = 21  # latent spline control points (paper 11: too few for the push-off)
+    n_stance: int = 32  # contact nodes every 10 ms
+    n_flight: int = 80  # flight nodes every 5 ms
+    n_land: int = 62
+    n_base_stance: int = 12  # control points of the stance's (x, z, pitch) base spline
+    n_base_land: int = 12
+    foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact
+    ball_tolerance: float = 0.02  # m an unloaded ball may sink below the ground (soft sole)
+    contact_tolerance: float = 0.01  # m a loaded heel or ball stays within this of the ground
+    flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
+    tube_spacing: float = 0.005  # s between tube points
+    wrench_spacing: float = 0.005  # s between wrench samples (0: none)
+    torque_limits: bool = True  # Eq. 34
+    polygon: bool = True  # Eq. 35-36 in the landing
+    two_phase: bool = True  # phase 1: feasible point nearest the training fit; phase 2: distance
+    hessian: str = "exact"  # or "lbfgs"
+    max_iter: int = 1500
+    tol: float = 1e-5
