@@ -152,6 +152,18 @@ def _torque_family(model: SymbolicModel, layer, path: SplinePath, t: np.ndarray,
     return Family("torque", BlockEvaluator(block, layer), S, s0, Cg=Cg, cf=cf.ravel()), lb, ub
 
 
+def _joint_limit_family(layer, path: SplinePath, t: np.ndarray) -> Family:
+    """Rows y(t_j) (node-major): through the joint-position block, or, when the path is the
+    joint path itself (identity layer), linear in w: y = B0 P."""
+    if isinstance(layer, IdentityLayer):
+        S, s0 = _spline_inputs(path, t, 1)
+        empty = sp.csr_matrix((S.shape[0], 0))  # no node evaluator: the rows are L w + c
+        return Family("joint_limits", None, sp.csr_matrix((0, path.n_w)), np.zeros(0), Cg=empty, L=S, c=s0)
+    S, s0 = _spline_inputs(path, t, 3)
+    block = BlockEvaluator(joint_position_block(layer.output_dim, layer.latent_dim), layer)
+    return Family("joint_limits", block, S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
+
+
 def _build(method: str, model: SymbolicModel, layer, settings: MinTorqueSettings, path: SplinePath,
            lbx: np.ndarray, ubx: np.ndarray, tube: float | None) -> MinTorqueNLP:
     if model.nq != model.nv or model.nv != layer.output_dim:
@@ -160,7 +172,7 @@ def _build(method: str, model: SymbolicModel, layer, settings: MinTorqueSettings
     spline = path.spline
     quad_t, quad_w = gauss_legendre_nodes(spline, settings.quadrature_points)
     grid_t = constraint_times(spline, settings.constraint_points)
-    Kg, D = len(grid_t), layer.output_dim
+    Kg = len(grid_t)
     families, lbg, ubg = [], [], []
     if tube is not None:  # sigma^2(x(t_j)) <= delta (Eq. 29)
         S, s0 = _spline_inputs(path, grid_t, 1)
@@ -168,9 +180,7 @@ def _build(method: str, model: SymbolicModel, layer, settings: MinTorqueSettings
         lbg.append(np.full(Kg, -np.inf))
         ubg.append(np.full(Kg, float(tube)))
     if settings.joint_limits:
-        S, s0 = _spline_inputs(path, grid_t, 3)
-        block = BlockEvaluator(joint_position_block(D, layer.latent_dim), layer)
-        families.append(Family("joint_limits", block, S, s0, Cg=sp.identity(Kg * D, format="csr")))
+        families.append(_joint_limit_family(layer, path, grid_t))
         lbg.append(np.tile(np.asarray(model.model.lowerPositionLimit, dtype=float), Kg))
         ubg.append(np.tile(np.asarray(model.model.upperPositionLimit, dtype=float), Kg))
     tmax = torque_limit_vector(settings.torque_limits, model.nv)
