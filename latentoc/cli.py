@@ -48,7 +48,8 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--method", choices=["latent", "joint-range"], default="latent")
     s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>)")
-    s.add_argument("--quiet", action="store_true", help="no Ipopt iteration log")
+    s.add_argument("--quiet", action="store_true", help="no progress display")
+    s.add_argument("--verbose", action="store_true", help="Ipopt's own iteration log")
     s.add_argument("--keep-failed", action="store_true", help="write files even if Ipopt did not succeed")
     s.add_argument("--plots", action="store_true", help="also write PNG figures (and motion.gif) to OUT/plots")
 
@@ -63,6 +64,7 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
     w.add_argument("--out", type=Path, default=None)
     w.add_argument("--plots", action="store_true", help="also write OUT/gain_vs_tube.png")
+    w.add_argument("--quiet", action="store_true", help="no progress display")
 
     sp = sub.add_parser("start-poses", help="end-effector distances of new start poses vs tube (Sect. 4.1.4)")
     sp.add_argument("problem")
@@ -91,7 +93,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem)
     tube = _tube_arg(args.tube) if args.tube is not None else None
     sol = solve(problem, tube=tube, latent_dim=args.latent_dim, control_points=args.control_points,
-                hessian=args.hessian, method=args.method, joint_range_deg=args.joint_range, verbose=not args.quiet)
+                hessian=args.hessian, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose)
     r = sol.result
     print(f"{r['problem']} ({r['method']}): {r['status']} after {r['iterations']} iterations")
     print(f"  cost {r['cost_initial']:.3f} -> {r['cost']:.3f}  (gain {r['performance_gain_pct']:.2f} %)")
@@ -194,6 +196,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
+    from .progress import quiet, set_quiet
+
+    was_quiet = quiet()
+    set_quiet(was_quiet or getattr(args, "quiet", False))
     commands = {"list": lambda a: _cmd_list(), "solve": _cmd_solve, "sweep": _cmd_sweep,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:
@@ -204,3 +210,5 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("latentoc: interrupted", file=sys.stderr)
         return 130
+    finally:
+        set_quiet(was_quiet)

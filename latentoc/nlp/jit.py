@@ -25,7 +25,7 @@ __all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "threads
 
 JIT_FLAGS = ("-O1",)
 # gcc's optimiser is superlinear on long straight-line code: past this size -O0 (docs/derivatives.md)
-LARGE_FUNCTION = 50_000
+LARGE_FUNCTION = 150_000
 LARGE_FLAGS = ("-O0",)
 
 
