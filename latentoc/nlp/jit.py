@@ -43,8 +43,10 @@ def cache_dir() -> Path:
 
 
 def compiler() -> str | None:
-    """The C compiler ($CC, else gcc, else cc), or None."""
-    return shutil.which(os.environ.get("CC") or "gcc") or shutil.which("cc")
+    """The C compiler: $CC if set (None if it is not found), else gcc, else cc, else None."""
+    if os.environ.get("CC"):
+        return shutil.which(os.environ["CC"])
+    return shutil.which("gcc") or shutil.which("cc")
 
 
 def enabled() -> bool:

@@ -1,0 +1,54 @@
+"""latentoc.nlp.jit: compiled robot blocks fall back to CasADi's virtual machine without a
+working compiler; Ipopt's BLAS threads (latentoc.nlp.ipopt.load_ipopt)."""
+import os
+import subprocess
+import sys
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from latentoc.nlp.blocks import RobotBlock, block_inputs, compile_blocks
+
+
+def _block(name: str) -> RobotBlock:
+    y, yd, ydd, r = block_inputs(2, 1)
+    return RobotBlock.from_parts(name, (y, yd, ydd, r), {"f": ca.sin(y[0]) * yd[1] + r[0] * ydd[0] ** 2}, 1)
+
+
+@pytest.mark.parametrize("cc", ["no-such-compiler", "false"])
+def test_blocks_fall_back_to_sx_without_a_working_compiler(cc, tmp_path, monkeypatch):
+    """No compiler (warning), or one that fails (warning): the blocks keep CasADi's SX Functions,
+    with the same values, and nothing is left in the cache."""
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.delenv("LATENTOC_JIT", raising=False)
+    monkeypatch.setenv("CC", cc)
+    if cc == "false":
+        monkeypatch.setenv("PATH", os.environ["PATH"])  # /bin/false or /usr/bin/false: runs and fails
+    b = _block(f"lc_fallback_{cc.replace('-', '_')}")
+    with pytest.warns(UserWarning, match="no C compiler|failed"):
+        compile_blocks([b])
+    assert all(f.is_a("SXFunction") for f in b.functions.values())
+    assert not list(tmp_path.glob("*.so")) and not list(tmp_path.glob(".build-*"))
+    ref = b.derivative_functions()["rows"]
+    x = np.array([0.3, -0.2])
+    assert np.allclose(np.asarray(b.functions["rows"](x, x, x, [0.5])), np.asarray(ref(x, x, x, [0.5])))
+
+
+def test_ipopt_loads_its_blas_on_one_thread():
+    """Loading the Ipopt plugin starts no OpenBLAS worker threads (counted in /proc in a fresh
+    process), leaves $OPENBLAS_NUM_THREADS unset, and a value the user sets is obeyed."""
+    if not os.path.isdir("/proc/self/task"):
+        pytest.skip("needs /proc to count threads")
+    code = ("import os, numpy, casadi\n"
+            "n = len(os.listdir('/proc/self/task'))\n"
+            "from latentoc.nlp.ipopt import load_ipopt\n"
+            "load_ipopt()\n"
+            "print(len(os.listdir('/proc/self/task')) - n, os.environ.get('OPENBLAS_NUM_THREADS'))\n")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["0", "None"]
+    if (os.cpu_count() or 1) > 1:  # the count does see OpenBLAS's workers when they are asked for
+        out = subprocess.run([sys.executable, "-c", code], env={**env, "OPENBLAS_NUM_THREADS": "2"},
+                             capture_output=True, text=True, check=True).stdout
+        assert out.split() == ["1", "2"]
