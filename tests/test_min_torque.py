@@ -156,7 +156,8 @@ def test_sampled_motion_equals_casadi_kinematics_and_rnea(arm):
     kin = latent_kinematics(gp)
     data = robot.createData()
     for k, tk in enumerate(ts):
-        q, v, a = (np.asarray(o).ravel() for o in kin(*(path.spline.evaluate(path.P_init, [tk], r)[0] for r in range(3))))
+        z = (path.spline.evaluate(path.P_init, [tk], r)[0] for r in range(3))
+        q, v, a = (np.asarray(o).ravel() for o in kin(*z))
         tau = pin.rnea(robot, data, q, v, a)
         for got, want in ((m["q"][k], q), (m["v"][k], v), (m["a"][k], a), (m["tau"][k], tau)):
             assert np.abs(got - want).max() <= 1e-8 * max(1.0, np.abs(want).max())

@@ -57,7 +57,8 @@ def test_exported_physics(problem, solution):
     kin = ca.Function("kin", [x, xd, xdd], [q, v, ca.jtimes(q, x, xdd) + ca.jtimes(v, x, xd)])
     spline = BSpline(solution.result["control_points"], solution.result["duration"])
     for k in range(0, len(tr["t"]), 97):
-        ref = [np.asarray(o).ravel() for o in kin(*(spline.evaluate(tr["P"], tr["t"][k:k + 1], r)[0] for r in range(3)))]
+        z = (spline.evaluate(tr["P"], tr["t"][k:k + 1], r)[0] for r in range(3))
+        ref = [np.asarray(o).ravel() for o in kin(*z)]
         ref.append(pin.rnea(model, data, *ref))
         for got, want in zip((tr["q"][k], tr["v"][k], tr["a"][k], tr["tau"][k]), ref):
             assert np.abs(got - want).max() <= 1e-8 * max(1.0, np.abs(want).max())

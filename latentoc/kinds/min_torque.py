@@ -13,12 +13,14 @@ the joint motion at node k. Two methods give the joint motion along a spline pat
   +-k degrees of its value in the fit of the training motion (Table 2, "joint range").
 
 Both hold the joint limits on the constraint grid and, if the problem gives torque limits,
-|tau| <= limit at the quadrature nodes. Each row family is one robot block
+|tau| <= limit at the quadrature nodes. Each nonlinear row family is one robot block
 (:mod:`latentoc.nlp.blocks`); with torque limits a single block gives (|tau|^2, tau), feeding
-both the objective and the torque rows, so RNEA runs once per node.
+both the objective and the torque rows, so RNEA runs once per node. The joint-range joint
+limits are linear in the decision vector (q = B0 P) and need no block.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -33,6 +35,7 @@ from ..nlp.assemble import Family, SparseNLP
 from ..nlp.blocks import RobotBlock, block_inputs
 from ..nlp.evaluators import BlockEvaluator, VarianceEvaluator
 from ..nlp.inputs import NodeInputs
+from ..problem import Problem
 from ..spline import BSpline
 from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
 
@@ -60,7 +63,7 @@ class MinTorqueSettings:
     torque_limits: tuple[float, ...] = ()
 
     @classmethod
-    def from_problem(cls, problem, control_points: int | None = None) -> "MinTorqueSettings":
+    def from_problem(cls, problem: Problem, control_points: int | None = None) -> "MinTorqueSettings":
         """The settings a :class:`~latentoc.problem.Problem` declares (``control_points`` overrides m)."""
         m = problem.control_points if control_points is None else control_points
         return cls(duration=problem.duration, control_points=int(m), spline_degree=problem.spline_degree,
@@ -101,7 +104,7 @@ class MinTorqueNLP:
         return self.nlp.objective(np.asarray(w, dtype=float))
 
 
-def torque_limit_vector(torque_limits, nv: int) -> np.ndarray | None:
+def torque_limit_vector(torque_limits: Sequence[float], nv: int) -> np.ndarray | None:
     """Per-joint torque bounds from the problem's list ([] none, [s] all, or nv values)."""
     if len(torque_limits) == 0:
         return None
@@ -134,7 +137,7 @@ def _spline_inputs(path: SplinePath, t: np.ndarray, orders: int) -> tuple[sp.csr
     return ni.build()
 
 
-def _torque_family(model: SymbolicModel, layer, path: SplinePath, t: np.ndarray, w: np.ndarray,
+def _torque_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray, w: np.ndarray,
                    tmax: np.ndarray | None) -> tuple[Family, np.ndarray, np.ndarray]:
     """The objective's family (cf = quadrature weights on L) and, with limits, the torque rows."""
     nv, K = model.nv, len(t)
@@ -152,7 +155,7 @@ def _torque_family(model: SymbolicModel, layer, path: SplinePath, t: np.ndarray,
     return Family("torque", BlockEvaluator(block, layer), S, s0, Cg=Cg, cf=cf.ravel()), lb, ub
 
 
-def _joint_limit_family(layer, path: SplinePath, t: np.ndarray) -> Family:
+def _joint_limit_family(layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray) -> Family:
     """Rows y(t_j) (node-major): through the joint-position block, or, when the path is the
     joint path itself (identity layer), linear in w: y = B0 P."""
     if isinstance(layer, IdentityLayer):
@@ -164,8 +167,8 @@ def _joint_limit_family(layer, path: SplinePath, t: np.ndarray) -> Family:
     return Family("joint_limits", block, S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
 
 
-def _build(method: str, model: SymbolicModel, layer, settings: MinTorqueSettings, path: SplinePath,
-           lbx: np.ndarray, ubx: np.ndarray, tube: float | None) -> MinTorqueNLP:
+def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, settings: MinTorqueSettings,
+           path: SplinePath, lbx: np.ndarray, ubx: np.ndarray, tube: float | None) -> MinTorqueNLP:
     if model.nq != model.nv or model.nv != layer.output_dim:
         raise ValueError(f"the motion has {layer.output_dim} joint angles but the model has nq = {model.nq}, "
                          f"nv = {model.nv}; the minimum-torque NLP needs nq = nv = D")
@@ -203,6 +206,8 @@ def latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: MinTorqueSettings, tu
     ``path``: the latent spline with its initial control points; else the fit of the GPDM's
     training latent path at the training times ``t_train``."""
     if path is None:
+        if t_train is None:
+            raise ValueError("latent_nlp needs the initial path or the training times t_train to fit it")
         path = SplinePath.fit(settings.spline(), t_train, gpdm.latent_trajectories()[0], settings.boundary)
     n = path.n_w
     return _build("latent", model, GPLayer(gpdm), settings, path, np.full(n, -np.inf), np.full(n, np.inf),
