@@ -83,10 +83,12 @@ class SolveError(ValueError):
 
 @dataclass
 class Solution:
-    """A solved problem: ``result`` (JSON-ready dict) and ``trajectory`` (numpy arrays)."""
+    """A solved problem: ``result`` (JSON-ready dict), ``trajectory`` (numpy arrays) and ``warm``,
+    what a neighbouring solve of the same problem may start from (a kind's own data)."""
 
     result: dict[str, Any]
     trajectory: dict[str, np.ndarray] = field(default_factory=dict)
+    warm: dict[str, Any] | None = None
 
     @property
     def success(self) -> bool:
@@ -114,15 +116,15 @@ def solver_for(kind: str) -> Callable[..., Solution]:
 def solve(problem: Problem, *, tube: float | str | None = None, latent_dim: int | None = None,
           control_points: int | None = None, hessian: str | None = None, method: str = "latent",
           joint_range_deg: float | None = None, gpdm: GPDM | None = None, verbose: bool = False,
-          initial_guess: np.ndarray | None = None) -> Solution:
+          warm_start: Solution | None = None) -> Solution:
     """Solve ``problem`` with optional overrides of its declared parameters (see module doc).
 
-    ``initial_guess`` (a warm start) is passed on only when given, so solvers of kinds that
-    take none (the broad jump) keep their signature."""
-    extra = {} if initial_guess is None else {"initial_guess": initial_guess}
+    ``warm_start``: the Solution of the same problem at a smaller tube (the sweep passes the
+    previous one), whose optimum is feasible here; each kind takes what it needs from its
+    ``warm`` (the arm: the control points; the jump: the point and multipliers)."""
     return solver_for(problem.kind)(problem, tube=tube, latent_dim=latent_dim, control_points=control_points,
                                     hessian=hessian, method=method, joint_range_deg=joint_range_deg,
-                                    gpdm=gpdm, verbose=verbose, **extra)
+                                    gpdm=gpdm, verbose=verbose, warm_start=warm_start)
 
 
 # ---------------------------------------------------------------- GPDM cache
@@ -210,14 +212,15 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
                             control_points: int | None = None, hessian: str | None = None,
                             method: str = "latent", joint_range_deg: float | None = None,
                             gpdm: GPDM | None = None, verbose: bool = False,
-                            initial_guess: np.ndarray | None = None) -> Solution:
+                            warm_start: Solution | None = None) -> Solution:
     """Minimum-torque motion (L = |tau|^2) in the GPDM latent space or, with
     ``method="joint-range"``, in the full configuration space (Sect. 4.1.1);
     the NLP is :mod:`latentoc.kinds.min_torque`'s.
 
-    ``initial_guess``: latent control points (m x d) Ipopt starts from instead of the
-    training fit (:func:`latentoc.sweep.sweep` passes the previous, smaller tube's optimum);
-    cost_initial and the gain still refer to the training fit."""
+    ``warm_start``: a Solution whose latent control points (m x d, its ``warm["P"]``) Ipopt
+    starts from instead of the training fit (:func:`latentoc.sweep.sweep` passes the previous,
+    smaller tube's); cost_initial and the gain still refer to the training fit."""
+    initial_guess = None if warm_start is None or not warm_start.warm else warm_start.warm.get("P")
     m = problem.control_points if control_points is None else control_points
     hessian = problem.hessian if hessian is None else hessian
     _check_common(problem, m, hessian, method)
@@ -290,7 +293,7 @@ def solve_latent_min_torque(problem: Problem, *, tube: float | str | None = None
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
                   "x": x, "P": P, "P_initial": P0, "q_initial": init["q"], "sigma2": sigma2,
                   "model": np.str_(robot.saveToString())}
-    return Solution(result=result, trajectory=trajectory)
+    return Solution(result=result, trajectory=trajectory, warm={"P": P} if res.success else None)
 
 
 def _solve_joint_range(problem: Problem, robot, sym: SymbolicModel, m: int, hessian: str,

@@ -4,12 +4,9 @@
 range of the full-space baseline, reusing one learned GPDM; :func:`format_table`
 prints the rows like Table 2 (tube, cost, gain %, time | range, cost, gain %, time).
 
-Warm start (``warm_start=True``, default, latent-min-torque problems): a smaller tube's
-optimum is feasible for a larger one, so each tube starts Ipopt from the optimum of the
-largest smaller tube solved before it (in the given order), instead of the training fit.
-Measured on arm-raise (d = 3), tubes 1.5x ... 1000x in order: 267 -> 211 iterations in
-total (1.5x 34 -> 34, 5x 27 -> 22, 50x 24 -> 16, 1000x 44 -> 32), every optimum the same to
-5e-11 relative.
+Warm start (``warm_start=True``, default): a smaller tube's optimum is feasible for a larger
+one, so each tube starts from the Solution of the largest smaller tube solved before it (in the
+given order), instead of the training fit (:func:`latentoc.solve.solve`'s ``warm_start``).
 """
 
 from __future__ import annotations
@@ -29,7 +26,7 @@ _FIELDS = ("method", "tube_spec", "tube", "tube_relative", "joint_range_deg", "l
 # the 1 kHz verification of contact problems (latentoc.jump.verify), kept when a result has them
 _CHECKS = ("max_dynamics_residual", "max_flight_residual", "min_normal_force", "max_friction_ratio", "cop_margin",
            "cop_margin_loaded", "zmp_margin", "com_margin", "max_torque_violation", "max_point_cone_violation",
-           "max_sigma2", "time_scale", "toe_displacement", "toe_slip", "eq33_feet_distance")
+           "max_sigma2", "toe_displacement", "toe_slip", "eq33_feet_distance")
 
 
 # the other start of a tube solved from two (the broad jump's sweep_starts), kept when present
@@ -52,18 +49,17 @@ def sweep(problem: Problem, tubes: Sequence[float | str], baseline_ranges: Seque
     rows: list[dict[str, Any]] = []
     gp = problem_gpdm(problem, latent_dim)[0] if tubes else None
     total = len(tubes) + len(baseline_ranges or [])
-    warm = warm_start and problem.kind == "latent-min-torque"
-    solved: list[tuple[float, Any]] = []  # (delta, control points) of the successful latent solves
+    solved: list[tuple[float, Any]] = []  # (delta, Solution) of the successful latent solves
     for i, tube in enumerate(tubes):
-        guess = None
-        if warm and solved:
+        previous = None
+        if warm_start and solved:
             delta = resolve_tube(tube, gp.tube_size())
             smaller = [s for s in solved if s[0] <= delta]
-            guess = max(smaller, key=lambda s: s[0])[1] if smaller else None
-        sol = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian, initial_guess=guess)
+            previous = max(smaller, key=lambda s: s[0])[1] if smaller else None
+        sol = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian, warm_start=previous)
         r = sol.result
-        if warm and r["success"]:
-            solved.append((r["tube"], sol.trajectory["P"]))
+        if warm_start and r["success"] and sol.warm:
+            solved.append((r["tube"], sol))
         rows.append(_row(r))
         if progress:
             progress(f"[{i + 1}/{total}] tube {tube}: delta {r['tube']:.4g}, cost {r['cost']:.2f}, "

@@ -25,20 +25,21 @@ def test_rows(rows):
 
 
 def test_rows_keep_the_contact_checks(monkeypatch):
-    """A contact problem's 1 kHz verification (and time scale) travels into its sweep row."""
+    """A contact problem's 1 kHz verification travels into its sweep row."""
     import latentoc.sweep as sw
 
     class Sol:
         result = {"method": "latent", "tube": 0.02, "tube_spec": 0.02, "cost": 0.4, "cost_initial": 0.7,
                   "performance_gain_pct": -40.0, "solve_time_s": 1.0, "status": "Solve_Succeeded", "success": True,
-                  "max_friction_ratio": 0.38, "cop_margin": 0.01, "time_scale": 0.97,
+                  "max_friction_ratio": 0.38, "cop_margin": 0.01,
                   "toe_slip": 0.02, "other_start": {"warm_start": True, "distance": 0.35}}
         trajectory: dict = {}
+        warm = None
 
     monkeypatch.setattr(sw, "solve", lambda *a, **k: Sol())
     monkeypatch.setattr(sw, "problem_gpdm", lambda *a, **k: (None,))
     (row,) = sw.sweep(load_problem("broad-jump"), [0.02], progress=None)
-    assert row["max_friction_ratio"] == 0.38 and row["cop_margin"] == 0.01 and row["time_scale"] == 0.97
+    assert row["max_friction_ratio"] == 0.38 and row["cop_margin"] == 0.01
     assert row["toe_slip"] == 0.02 and "toe_displacement" not in row
     assert row["cost"] == 0.4 and "zmp_margin" not in row
     assert row["other_start"] == {"warm_start": True, "distance": 0.35}  # the start not kept

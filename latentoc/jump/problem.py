@@ -205,7 +205,7 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     blocks = js.blocks(robot)
     compile_time = time.perf_counter() - t1
     warm = None
-    if warm_start is not None and getattr(warm_start, "warm", None) and warm_start.warm.get("tube", np.inf) <= delta:
+    if warm_start is not None and warm_start.warm and warm_start.warm.get("tube", np.inf) <= delta:
         warm = warm_start.warm
     sol = solve_jump(robot, layer, blocks, js.phases, s, js.init, warm=warm, verbose=verbose)
     if warm is not None and (o.get("sweep_starts", SWEEP_STARTS[0]) == "warm+cold" or not sol.result["success"]):
@@ -232,6 +232,4 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
               "max_tube_violation": max(0.0, float(np.max(traj["sigma2"])) - delta), "quadrature_error": 0.0,
               "settings": asdict(s)})
     r.update(checks)
-    out = Solution(result=r, trajectory=traj)
-    out.warm = sol.warm_start() if sol.result["success"] else None
-    return out
+    return Solution(result=r, trajectory=traj, warm=sol.warm_start() if r["success"] else None)
