@@ -103,3 +103,15 @@ def test_unknown_hessian_is_refused():
     nlp, bounds, _, _ = _qp()
     with pytest.raises(ValueError, match="hessian"):
         ipopt.solve(nlp, np.zeros(N), **bounds, hessian="newton")
+
+
+def test_callbacks_are_counted_and_timed_and_options_reach_ipopt(capfd):
+    """IpoptResult.calls and .timings have the same callbacks; Ipopt prints nothing by default;
+    an option Ipopt does not know is an error from Ipopt (the options are passed on)."""
+    nlp, bounds, _, _ = _qp()
+    res = ipopt.solve(nlp, np.zeros(N), **bounds)
+    assert set(res.calls) == set(res.timings) and all(n > 0 for n in res.calls.values())
+    assert res.calls["nlp_hess_l"] == res.iterations  # one Hessian per iteration
+    assert "Ipopt" not in capfd.readouterr().out
+    with pytest.raises(RuntimeError):
+        ipopt.solve(nlp, np.zeros(N), **bounds, options={"no_such_ipopt_option": 1.0})

@@ -159,9 +159,8 @@ def _joint_limit_family(layer: GPLayer | IdentityLayer, path: SplinePath, t: np.
     """Rows y(t_j) (node-major): through the joint-position block, or, when the path is the
     joint path itself (identity layer), linear in w: y = B0 P."""
     if isinstance(layer, IdentityLayer):
-        S, s0 = _spline_inputs(path, t, 1)
-        empty = sp.csr_matrix((S.shape[0], 0))  # no node evaluator: the rows are L w + c
-        return Family("joint_limits", None, sp.csr_matrix((0, path.n_w)), np.zeros(0), Cg=empty, L=S, c=s0)
+        S, s0 = _spline_inputs(path, t, 1)  # no node evaluator: the rows are L w + c
+        return Family("joint_limits", None, sp.csr_matrix((0, path.n_w)), np.zeros(0), L=S, c=s0)
     S, s0 = _spline_inputs(path, t, 3)
     block = BlockEvaluator(joint_position_block(layer.output_dim, layer.latent_dim), layer)
     return Family("joint_limits", block, S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
