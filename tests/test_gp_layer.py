@@ -228,3 +228,19 @@ def test_bad_shapes_name_the_input(small_layer, call, name):
 def test_identity_layer_bad_shapes(call, name):
     with pytest.raises(ValueError, match=rf"^{name}: .*got shape"):
         call(IdentityLayer(2))
+
+
+def test_blas_threads_restored(small_layer):
+    """The layer runs OpenBLAS on one thread and gives the caller's thread count back, also
+    after an error."""
+    from latentoc.gpdm.learning import _openblas_handles
+
+    handles = _openblas_handles()
+    if not handles:
+        pytest.skip("no OpenBLAS found")
+    before = [int(get()) for get, _ in handles]
+    small_layer.motion(np.zeros((3, 6)))
+    small_layer.variance(np.zeros((3, 2)), np.ones(3))
+    with pytest.raises(ValueError):
+        small_layer.curvature(np.zeros((3, 6)), np.zeros((3, 5)))
+    assert [int(get()) for get, _ in handles] == before
