@@ -36,6 +36,7 @@ __all__ = ["RobotBlock", "block_inputs", "compile_blocks"]
 
 # bump when the derivative Functions made from the same rows change: the cache index keys on it
 BLOCK_VERSION = "1"
+PIECES = ("rows", "jac", "hess")
 
 
 def block_inputs(D: int, n_extra: int) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
@@ -82,32 +83,41 @@ class RobotBlock:
     def n_local(self) -> int:
         return 3 * self.latent_dim + self.n_extra
 
-    def derivative_functions(self) -> dict[str, ca.Function]:
-        """The SX Functions ``rows``, ``jac`` and ``hess`` (module doc)."""
+    def derivative_functions(self, pieces: tuple[str, ...] = PIECES) -> dict[str, ca.Function]:
+        """The SX Functions ``rows``, ``jac`` and ``hess`` (module doc), or those of ``pieces``."""
         D, d, nr, name = self.output_dim, self.latent_dim, self.n_extra, self.name
         y, yd, ydd, r = block_inputs(D, nr)
         G = [ca.SX.sym(f"G{i}", D, d) for i in range(3)]
         s = ca.SX.sym("s", self.n_local)
         sx, sv, sa, sr = s[:d], s[d:2 * d], s[2 * d:3 * d], s[3 * d:]
         lin = (y + G[0] @ sx, yd + G[1] @ sx + G[0] @ sv, ydd + G[2] @ sx + 2 * G[1] @ sv + G[0] @ sa, r + sr)
-        F_lin = self.rows_sx(*lin)
         zero = ca.DM.zeros(s.shape)
         F = self.rows_sx(y, yd, ydd, r)
-        lam = ca.SX.sym("l", self.n_out)
-        J = ca.substitute(ca.jacobian(F_lin, s), s, zero)
-        H = ca.substitute(ca.hessian(ca.dot(lam, F_lin), s)[0], s, zero)
-        mu = ca.gradient(ca.dot(lam, F), ca.vertcat(y, yd, ydd))
-        ins = [y, yd, ydd, r]
-        names = ["y", "yd", "ydd", "r"]
-        return {"rows": ca.Function(name, ins, [ca.cse(F)], names, ["F"]),
-                "jac": ca.Function(f"{name}_jac", ins + G, ca.cse([F, J]), names + ["G0", "G1", "G2"], ["F", "J"]),
-                "hess": ca.Function(f"{name}_hess", ins + G + [lam], ca.cse([H, mu]),
-                                    names + ["G0", "G1", "G2", "l"], ["H", "mu"])}
+        ins, names = [y, yd, ydd, r], ["y", "yd", "ydd", "r"]
+        out = {}
+        if "rows" in pieces:
+            out["rows"] = ca.Function(name, ins, [ca.cse(F)], names, ["F"])
+        if "jac" in pieces:
+            J = ca.substitute(ca.jacobian(self.rows_sx(*lin), s), s, zero)
+            out["jac"] = ca.Function(f"{name}_jac", ins + G, ca.cse([F, J]), names + ["G0", "G1", "G2"], ["F", "J"])
+        if "hess" in pieces:
+            lam = ca.SX.sym("l", self.n_out)
+            H = ca.substitute(ca.hessian(ca.dot(lam, self.rows_sx(*lin)), s)[0], s, zero)
+            mu = ca.gradient(ca.dot(lam, F), ca.vertcat(y, yd, ydd))
+            out["hess"] = ca.Function(f"{name}_hess", ins + G + [lam], ca.cse([H, mu]),
+                                      names + ["G0", "G1", "G2", "l"], ["H", "mu"])
+        return out
+
+    def function(self, which: str) -> ca.Function:
+        """Piece ``which``: compiled, or (without JIT) its SX Function, built when first asked for."""
+        if which not in self.functions:
+            self.functions.update(self.derivative_functions((which,)))
+        return self.functions[which]
 
     def mapped(self, which: str, K: int) -> ca.Function:
         key = (which, K)
         if key not in self._maps:
-            self._maps[key] = jit.node_map(self.functions[which], K)
+            self._maps[key] = jit.node_map(self.function(which), K)
         return self._maps[key]
 
 
@@ -129,10 +139,7 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
     compiler, ``LATENTOC_JIT=0``) CasADi's SX Functions."""
     todo = []
     for b in blocks:
-        if b.functions:
-            continue
-        if not jit.enabled():
-            b.functions = b.derivative_functions()
+        if b.functions or not jit.enabled():  # without JIT the SX pieces are built when first used
             continue
         try:
             libs = json.loads(_index_file(b).read_text())["libraries"]
