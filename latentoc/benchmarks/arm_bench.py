@@ -10,6 +10,10 @@ Run: ``python -m latentoc bench arm [--problem arm-raise] [--tubes 5x] [--ranges
   times from the training fit; the median wall and CPU time, Ipopt's iterations, and per
   callback (:attr:`latentoc.nlp.ipopt.IpoptResult.timings`) ms per call x calls, plus what is
   left for Ipopt itself.
+
+The header names the threads of the mapped blocks (``$LATENTOC_THREADS``) and of numpy's BLAS
+(``$OPENBLAS_NUM_THREADS``) and the machine's load average: on a shared machine, wall times
+follow the load.
 """
 from __future__ import annotations
 
@@ -26,6 +30,7 @@ import numpy as np
 from latentoc.dynamics import SymbolicModel
 from latentoc.kinds.min_torque import MinTorqueSettings, ipopt_options, joint_range_nlp, latent_nlp
 from latentoc.nlp import ipopt
+from latentoc.nlp.jit import threads
 from latentoc.problem import TRAINING_MOTIONS, load_problem, training_motion
 from latentoc.progress import set_quiet
 from latentoc.robots import load_robot
@@ -84,6 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-first", action="store_true", help="skip the empty-cache first solve")
     args = p.parse_args(argv)
     problem = load_problem(args.problem)
+    print(f"{args.problem}: block threads {threads()}, OPENBLAS_NUM_THREADS "
+          f"{os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, load average {os.getloadavg()[0]:.2f}", flush=True)
     if not args.no_first:
         tube = args.tubes[0] if args.tubes else str(problem.tube)
         r = first_solve(args.problem, tube)
@@ -117,6 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         nlp = joint_range_nlp(sym, settings, t_all, Q_all, k)
         build = time.perf_counter() - t0
         print(_line("joint-range", f"{k:g}", build, warm_solves(nlp, problem, args.repeat)), flush=True)
+    print(f"load average {os.getloadavg()[0]:.2f}")
     return 0
 
 
