@@ -1,4 +1,4 @@
-"""Foot contact: points, ball-pinned anchoring of the base, contact forces (Sect. 4.2).
+"""Foot contact: points and contact forces (Sect. 4.2).
 
 Contact points of the left foot (the right one is its mirror image):
 
@@ -7,24 +7,17 @@ Contact points of the left foot (the right one is its mirror image):
 * ``heel`` - a point fixed in the foot body (frame ``lfoot``, at the ankle): the ankle
   dropped vertically to the ground in the first (standing) training frame.
 
-Anchoring (stance and landing): the toe tip is pinned on the ground at ``(x_pin, z = 0)``
-and the foot's pitch ``phi`` (angle of the heel-toe line above the ground, ``phi = 0``
-flat, ``phi > 0`` heel up) is a decision spline.  The joint angles then fix the base:
-with ``d`` the toe-minus-heel vector and ``r`` the toe tip, both in the base frame,
-``pitch = atan2(d_z, d_x) + phi`` and ``(x, z) = (x_pin, 0) - (R_y(pitch) r)_{x,z}``.
-The foot constraints hold by construction (kinematic anchoring).  The toe tip is the
-pivot because the captured push-off rolls over it (the ball rises ~8 cm before
-takeoff while the toe tip stays down) and the landing is toe-first.
+In contact (stance and landing) the toe tip stays near its ground point ``(x_pin, z = 0)``
+(the contact rows, :mod:`.rows.contact`): the captured push-off rolls over it (the ball
+rises ~8 cm before takeoff while the toe tip stays down) and the landing is toe-first.
 
 Contact forces: three points per foot (heel, ball, toe), each with a 2-D friction
 pyramid written with its two edge generators ``lam1 (mu, 1) + lam2 (-mu, 1)``,
 ``lam >= 0``.  In the sagittal plane this pyramid *is* the exact cone ``|fx| <= mu fz``;
 lateral forces are zero by symmetry.  Unilateral forces and the centre of pressure
 inside the foot (between heel and toe) follow from ``lam >= 0``.  The heel and ball can
-push only when they are on the ground: by the training motion's contact schedule
-(:mod:`.phases`, the default) or by relaxed complementarity
-``(lam_heel1 + lam_heel2) * z_heel <= eps`` (same for the ball); always ``z_heel >= 0``
-(``phi >= 0``) and ``z_ball >= -ball_tolerance`` (soft sole under the ball).
+push only when they are on the ground, by the training motion's contact schedule
+(:mod:`.phases`).
 """
 from __future__ import annotations
 
@@ -77,22 +70,6 @@ def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
     ball = sym.frame_placement(BALL)(q)[0]
     toe = sym.frame_placement(TOE)(q)[0]
     return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, toe)], ["q"], ["P"])
-
-
-def anchor_function(sym: SymbolicModel, smap: SymmetryMap, geom: FootGeometry) -> ca.Function:
-    """(y [n_learned], phi, x_pin) -> base (x, z, pitch) with the toe tip pinned at (x_pin, 0)."""
-    y, phi, xpin = ca.SX.sym("y", smap.n_learned), ca.SX.sym("phi"), ca.SX.sym("x_pin")
-    E = ca.DM(joint_embedding(smap))
-    q = ca.vertcat(0, 0, 0, 0, 0, 0, 1, E @ y)
-    P = points_function(sym, geom)(q)
-    heel, toe = P[:, 0], P[:, 2]
-    dvec = toe - heel
-    pitch = ca.atan2(dvec[2], dvec[0]) + phi
-    c, s = ca.cos(pitch), ca.sin(pitch)
-    rx = c * toe[0] + s * toe[2]
-    rz = -s * toe[0] + c * toe[2]
-    b = ca.vertcat(xpin - rx, -rz, pitch)
-    return ca.Function("anchor", [y, phi, xpin], [b], ["y", "phi", "x_pin"], ["b"])
 
 
 def generator_matrix(mu: float = MU) -> np.ndarray:
