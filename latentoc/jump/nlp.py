@@ -37,7 +37,7 @@ from .robot import JumpRobot
 from .settings import JumpSettings
 from .variables import JumpVariables
 
-__all__ = ["JumpNLP", "build_nlp", "OBJECTIVES"]
+__all__ = ["JumpNLP", "Samples", "build_nlp", "default_samples", "node_grid", "OBJECTIVES"]
 
 OBJECTIVES = ("feasibility", "distance")
 FORCE_REGULARISATION = 1e-4
@@ -84,11 +84,50 @@ def merge_samples(samples: np.ndarray, extra: np.ndarray, nodes: np.ndarray, gap
     return np.sort(np.concatenate([samples, np.asarray(keep, float)]))
 
 
+@dataclass
+class Samples:
+    """Times of the rows that are not tied to variables: the wrench samples in contact and the
+    flight's torque rows (the exchange of :mod:`.exchange` adds to them)."""
+
+    wrench: np.ndarray
+    flight_torque: np.ndarray
+
+    def merged(self, other: "Samples") -> "Samples":
+        return Samples(np.union1d(self.wrench, other.wrench), np.union1d(self.flight_torque, other.flight_torque))
+
+
+def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
+    """Contact and flight node times: stance, flight, landing."""
+    s, ph = settings, phases
+    return {"stance": np.linspace(0.0, ph.takeoff, s.n_stance), "flight": np.linspace(ph.takeoff, ph.touchdown, s.n_flight),
+            "land": np.linspace(ph.touchdown, ph.duration, s.n_land)}
+
+
+def default_samples(settings: JumpSettings, phases: Phases) -> Samples:
+    """Wrench samples every ``wrench_spacing`` between the contact nodes, just inside each unloaded
+    interval of the contact schedule and at the splines' breakpoints (their accelerations kink
+    there); the flight's torque rows at the flight nodes."""
+    s, ph = settings, phases
+    grid = node_grid(s, ph)
+    ts, tl, T = grid["stance"], grid["land"], ph.duration
+    tw = np.zeros(0)
+    if s.wrench_spacing > 0:
+        knots = np.concatenate([BSpline(s.n_control, T).breakpoints, BSpline(s.n_base_stance, ph.takeoff).breakpoints,
+                                ph.touchdown + BSpline(s.n_base_land, T - ph.touchdown).breakpoints])
+        sw = ph.switch_samples()
+        tws = merge_samples(between(ts, s.wrench_spacing),
+                            np.concatenate([sw[sw < ph.takeoff], knots[(knots > 0) & (knots < ph.takeoff)]]), ts)
+        twl = merge_samples(between(tl, s.wrench_spacing),
+                            np.concatenate([sw[sw > ph.touchdown], knots[(knots > ph.touchdown) & (knots < T)]]), tl)
+        tw = np.concatenate([tws, twl])
+    return Samples(tw, grid["flight"].copy())
+
+
 class _Rows:
     """Row selection of one family: (node, output, scale) triples and their names."""
 
     def __init__(self, block: RobotBlock):
-        self.block, self.entries, self.names = block, [], []
+        self.block, self.entries, self.names, self.nodes = block, [], [], []
 
     def add(self, k: int, part: str, scale: np.ndarray | float = 1.0, subset: np.ndarray | None = None) -> None:
         s = self.block.layout[part]
@@ -97,6 +136,7 @@ class _Rows:
         for o, c in zip(rows, scale):
             self.entries.append((k * self.block.n_out + o, c))
         self.names.extend([part] * len(rows))
+        self.nodes.extend([k] * len(rows))
 
     def matrix(self, K: int) -> sp.csr_matrix:
         cols = np.array([e[0] for e in self.entries], np.int64)
@@ -124,31 +164,33 @@ def _base(ni: NodeInputs, sps: BSpline, spl: BSpline, t: np.ndarray, touchdown: 
 
 def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], phases: Phases,
               settings: JumpSettings, P_fixed: np.ndarray, objective: str = "distance",
-              wrench_samples: bool = True) -> JumpNLP:
-    """The NLP of one phase of the solve (module doc); ``P_fixed`` holds the latent end points."""
+              samples: Samples | None = None) -> JumpNLP:
+    """The NLP of one phase of the solve (module doc); ``P_fixed`` holds the latent end points,
+    ``samples`` the wrench samples and flight torque times (default :func:`default_samples`)."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
     s, ph = settings, phases
     d = layer.latent_dim
     T = ph.duration
-    ts, tf, tl = (np.linspace(0.0, ph.takeoff, s.n_stance), np.linspace(ph.takeoff, ph.touchdown, s.n_flight),
-                  np.linspace(ph.touchdown, T, s.n_land))
+    grid = node_grid(s, ph)
+    ts, tf, tl = grid["stance"], grid["flight"], grid["land"]
+    samples = default_samples(s, ph) if samples is None else samples
     sp_ = BSpline(s.n_control, T)
     sps, spl = BSpline(s.n_base_stance, ph.takeoff), BSpline(s.n_base_land, T - ph.touchdown)
     tc = np.concatenate([ts, tl])
     nS, nC, nF = len(ts), len(ts) + len(tl), len(tf)
     var = JumpVariables.layout(s.n_control, d, s.n_base_stance, s.n_base_land, nC, nF)
     n_w = var.n
-    families, names = [], []
-    act, kept = robot.active, robot.unmirrored
+    families, names, times = [], [], []
+    kept = robot.unmirrored
     tscale = 1.0 / robot.torque_scale
     free_kept = np.intersect1d(robot.force_free, kept)
 
-    def family(name: str, block: RobotBlock | None, ni: NodeInputs, rows: _Rows, evaluator=None, **kw) -> None:
+    def family(name: str, ni: NodeInputs, rows: _Rows, node_t: np.ndarray) -> None:
         S, s0 = ni.build()
-        ev = evaluator or BlockEvaluator(block, layer)
-        families.append(Family(name, ev, S, s0, Cg=rows.matrix(ni.K) if rows is not None else kw.pop("Cg"), **kw))
-        names.extend(rows.names if rows is not None else kw.get("row_names", []))
+        families.append(Family(name, BlockEvaluator(rows.block, layer), S, s0, Cg=rows.matrix(ni.K)))
+        names.extend(rows.names)
+        times.extend(np.asarray(node_t, float)[rows.nodes])
 
     # contact nodes
     ni = NodeInputs(nC, n_w)
@@ -167,17 +209,10 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
             rows.add(k, "zmp_polygon")
             if t >= ph.settle - 1e-9:
                 rows.add(k, "com_polygon")
-    family("contact", blocks["contact"], ni, rows)
+    family("contact", ni, rows, tc)
 
-    tw = np.zeros(0)
-    if wrench_samples and s.wrench_spacing > 0:
-        knots = np.concatenate([sp_.breakpoints, sps.breakpoints, ph.touchdown + spl.breakpoints])
-        sw = ph.switch_samples()
-        tws = merge_samples(between(ts, s.wrench_spacing),
-                            np.concatenate([sw[sw < ph.takeoff], knots[(knots > 0) & (knots < ph.takeoff)]]), ts)
-        twl = merge_samples(between(tl, s.wrench_spacing),
-                            np.concatenate([sw[sw > ph.touchdown], knots[(knots > ph.touchdown) & (knots < T)]]), tl)
-        tw = np.concatenate([tws, twl])
+    tw = np.asarray(samples.wrench, float)
+    if len(tw):
         ni = NodeInputs(len(tw), n_w)
         _latent(ni, sp_, tw, var, P_fixed)
         _base(ni, sps, spl, tw, ph.touchdown, var)
@@ -189,7 +224,7 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
             rows.add(k, "cop_heel" if heel[k] else "cop_ball" if ball[k] else "cop_pad")
             if s.torque_limits:
                 rows.add(k, "torque_free", tscale[free_kept], np.searchsorted(robot.force_free, free_kept))
-        family("wrench", blocks["wrench"], ni, rows)
+        family("wrench", ni, rows, tw)
 
     # takeoff
     t_to = np.array([ph.takeoff])
@@ -200,7 +235,7 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
                                  var.index("pitch_flight")[:1]])[None, :])
     rows = _Rows(blocks["takeoff"])
     rows.add(0, "takeoff")
-    family("takeoff", blocks["takeoff"], ni, rows)
+    family("takeoff", ni, rows, t_to)
 
     # pitch: p_k - p_0 = int_0^tau_k pd (trapezoid on a finer grid)
     tau_f = tf - ph.takeoff
@@ -218,20 +253,27 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     families.append(Family("pitch_integration", BlockEvaluator(blocks["pitch_rate"], layer), S, s0,
                            Cg=sp.csr_matrix(-A), L=L))
     names.extend(["pitch_integration"] * (nF - 1))
+    times.extend(tf[1:])
 
-    # flight nodes
-    ni = NodeInputs(nF, n_w)
-    _latent(ni, sp_, tf, var, P_fixed)
-    ni.variables(np.column_stack([pf, np.tile(np.concatenate([var.index("L_to"), var.index("c_to"),
-                                                              var.index("cd_to")]), (nF, 1))]))
-    ni.constant(tau_f[:, None])
-    rows = _Rows(blocks["flight"])
-    for k in range(nF):
-        if s.torque_limits:
+    # flight: torque rows at the sample times, foot clearance at the interior nodes
+    tft = np.asarray(samples.flight_torque, float)
+    if s.torque_limits and len(tft):
+        ni = NodeInputs(len(tft), n_w)
+        _latent(ni, sp_, tft, var, P_fixed)
+        ni.variables(np.full((len(tft), 1), var.index("L_to")[0]))
+        rows = _Rows(blocks["flight_torque"])
+        for k in range(len(tft)):
             rows.add(k, "torque", tscale[kept], kept)
-        if 0 < k < nF - 1:
-            rows.add(k, "flight_clearance")
-    family("flight", blocks["flight"], ni, rows)
+        family("flight_torque", ni, rows, tft)
+    ni = NodeInputs(nF - 2, n_w)
+    _latent(ni, sp_, tf[1:-1], var, P_fixed)
+    ni.variables(np.column_stack([pf[1:-1], np.tile(np.concatenate([var.index("L_to"), var.index("c_to"),
+                                                                     var.index("cd_to")]), (nF - 2, 1))]))
+    ni.constant(tau_f[1:-1, None])
+    rows = _Rows(blocks["flight_clearance"])
+    for k in range(nF - 2):
+        rows.add(k, "flight_clearance")
+    family("flight_clearance", ni, rows, tf[1:-1])
 
     # touchdown
     t_td = np.array([ph.touchdown])
@@ -244,7 +286,7 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     rows = _Rows(blocks["touchdown"])
     rows.add(0, "touchdown_position")
     rows.add(0, "impact")
-    family("touchdown", blocks["touchdown"], ni, rows)
+    family("touchdown", ni, rows, t_td)
 
     # tube on a dense grid (the end points are fixed on the training path)
     t_tube = np.linspace(0.0, T, max(2, int(round(T / s.tube_spacing)) + 1))[1:-1]
@@ -253,13 +295,14 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     S, s0 = ni.build()
     families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(len(t_tube), format="csr")))
     names.extend(["tube"] * len(t_tube))
+    times.extend(t_tube)
 
     nlp = SparseNLP(n_w, families, _objective(var, P_fixed, objective))
     names = np.array(names)
     lbg, ubg = _row_bounds(names, robot, s, ph, tc, nS, kept, free_kept)
     lbx, ubx = _variable_bounds(var, ph, tc)
-    return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, {"stance": ts, "flight": tf, "land": tl},
-                   (sp_, sps, spl), {"wrench_times": tw, "tube_times": t_tube, "tau_fine": tau_fine,
+    return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, grid, (sp_, sps, spl),
+                   {"samples": samples, "row_times": np.asarray(times, float), "tube_times": t_tube, "tau_fine": tau_fine,
                                       "flight_substeps": nsub, "objective": objective,
                                       "P_fixed": np.asarray(P_fixed, float)})
 

@@ -3,10 +3,10 @@ a Function of the joint motion (y, yd, ydd) and the node's other inputs r, never
 
 * :mod:`.contact` - a contact node: base rows = sum J^T f, torques, foot placement, ZMP, COM;
 * :mod:`.wrench` - a sample between contact nodes: the needed wrench in the loaded points' cone;
-* :mod:`.flight` - a flight node (ballistic base) and the flight's pitch rate;
+* :mod:`.flight` - the flight's joint torques (at any time), foot clearance and pitch rate;
 * :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact.
 
-Each module has ``INPUTS`` (the names and sizes of r, in order) and ``block(robot, d)``.
+Each module names its blocks' inputs r (sizes, in order) and builds them for latent dimension d.
 """
 from __future__ import annotations
 
@@ -32,9 +32,9 @@ def row_blocks(robot: JumpRobot, d: int, wrench_samples: bool = True) -> dict[st
     """Every row family's block for latent dimension d."""
     from . import contact, flight, transitions, wrench
 
-    blocks = {"contact": contact.block(robot, d), "flight": flight.block(robot, d),
-              "pitch_rate": flight.pitch_rate_block(robot, d), "takeoff": transitions.takeoff_block(robot, d),
-              "touchdown": transitions.touchdown_block(robot, d)}
+    blocks = {"contact": contact.block(robot, d), "flight_torque": flight.torque_block(robot, d),
+              "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
+              "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
     if wrench_samples:
         blocks["wrench"] = wrench.block(robot, d)
     return blocks
