@@ -1,133 +1,165 @@
-"""The broad-jump solve layer (latentoc.jump.problem.solve_jump_problem): warm starts."""
+"""The broad-jump problem kind (latentoc.jump.problem): [options], warm and cold starts, set-up."""
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import latentoc.jump.problem as jp
-import latentoc.jump.verify
+from latentoc.jump.settings import JumpSettings
+from latentoc.jump.solve import JumpSolution, solve_jump
+from latentoc.nlp.ipopt import IpoptResult
 from latentoc.problem import load_problem
+from latentoc.solve import SolveError
 
 
-class _GP:
-    latent_dim, beta, X = 3, np.ones(3), np.zeros((5, 3))
-
-    def tube_size(self):
-        return 1e-4
-
-
-class _JS:
-    gpdm, model = _GP(), None
-
-
-def _fake_solve(calls, outcome, starts=None):
-    """solve_broad_jump stand-in: ``outcome(warm, tube)`` gives (success, distance)."""
-    def solve(js, s, x0=None, duals=None):
-        warm = x0 is not None
-        calls.append(warm)
-        if starts is not None:
-            starts.append((x0, duals))
-        ok, dist = outcome(warm, s.tube)
-        return {"result": {"success": ok, "warm_start": warm, "status": "Solve_Succeeded" if ok else "Maximum_Iterations_Exceeded",
-                           "iterations": 7 if warm else 9, "solve_time_s": 1.0 if warm else 3.0, "distance": dist,
-                           "distance_initial": 0.73},
-                "w": np.full(3, s.tube + (0.0 if warm else 1.0)),
-                "duals": (np.full(2, -s.tube), np.full(3, 2 * s.tube + (0.0 if warm else 1.0))),
-                "nlp": type("N", (), {"x0": np.zeros(3), "lbg": np.zeros(2)})()}
-    return solve
-
-
-def _patched(monkeypatch, calls, outcome, starts=None, sweep_starts=None):
-    monkeypatch.setattr(jp, "_SETUP_CACHE", {})
-    monkeypatch.setattr(jp, "_WARM", {})
-    monkeypatch.setattr(jp, "setup", lambda *a, **k: _JS())
-    monkeypatch.setattr(jp, "solve_broad_jump", _fake_solve(calls, outcome, starts))
-    monkeypatch.setattr(jp, "trajectory", lambda js, out: {"sigma2": np.zeros(2)})
-    monkeypatch.setattr(latentoc.jump.verify, "verify", lambda *a, **k: {})
+def _with_options(**options):
     problem = load_problem("broad-jump")
-    if sweep_starts is not None:
-        problem = dataclasses.replace(problem, options={**problem.options, "sweep_starts": sweep_starts})
-    return problem
+    return dataclasses.replace(problem, options={**problem.options, **options})
 
 
-def test_sweep_keeps_the_better_of_the_warm_and_the_cold_start(monkeypatch):
-    """After a solved smaller tube, a tube is solved from that optimum (its point and multipliers)
-    and from the training fit; the better jump (converged first, then farther) is kept, the other
-    reported, and the kept one seeds the next warm start."""
-    calls, starts = [], []
-    # warm: 0.08 fails, 0.16 converges short of the cold optimum; 0.32 warm is the better
-    table = {(True, 0.08): (False, 0.4), (False, 0.08): (True, 0.9), (True, 0.16): (True, 0.85),
-             (False, 0.16): (True, 0.95), (True, 0.32): (True, 0.99), (False, 0.32): (True, 0.97)}
-    problem = _patched(monkeypatch, calls, lambda warm, tube: table.get((warm, tube), (True, 0.8)), starts)
-    first = jp.solve_jump_problem(problem, tube=0.04).result
-    assert calls == [False] and first["success"] and "other_start" not in first
-    second = jp.solve_jump_problem(problem, tube=0.08).result
-    assert calls == [False, True, False] and second["success"] and not second["warm_start"]
-    assert second["other_start"] == {"warm_start": True, "status": "Maximum_Iterations_Exceeded", "iterations": 7,
-                                     "solve_time_s": 1.0, "distance": 0.4}
-    third = jp.solve_jump_problem(problem, tube=0.16).result
-    assert calls[3:] == [True, False] and not third["warm_start"] and third["distance"] == 0.95
-    assert third["other_start"]["warm_start"] and third["other_start"]["distance"] == 0.85
-    fourth = jp.solve_jump_problem(problem, tube=0.32).result
-    assert calls[5:] == [True, False] and fourth["warm_start"] and fourth["distance"] == 0.99
-    assert fourth["other_start"] == {"warm_start": False, "status": "Solve_Succeeded", "iterations": 9,
-                                     "solve_time_s": 3.0, "distance": 0.97}
-    # each warm start gets the primal point and the multipliers (lam_g, lam_x) of the kept solve
-    (x1, d1), (x2, d2), (x3, d3), (x4, _), (x5, d5), (x6, _), (x7, d7) = starts
-    assert all(v is None for v in (x1, d1, x3, d3, x5, d5, x7, d7))
-    np.testing.assert_array_equal(x2, np.full(3, 0.04 + 1.0))  # the cold 0.04 solve's point
-    np.testing.assert_array_equal(d2[0], np.full(2, -0.04))
-    np.testing.assert_array_equal(d2[1], np.full(3, 0.08 + 1.0))
-    np.testing.assert_array_equal(x4, np.full(3, 0.08 + 1.0))  # the cold 0.08 solve's point
-    np.testing.assert_array_equal(x6, np.full(3, 0.16 + 1.0))  # the cold 0.16 solve's point
+class _Solves:
+    """A stand-in for solve_jump at one tube: ``outcome[warm]`` = (success, distance); records the
+    warm start each call gets."""
+
+    def __init__(self, tube, outcome):
+        self.tube, self.outcome, self.calls = tube, outcome, []
+
+    def __call__(self, warm):
+        self.calls.append(warm)
+        ok, dist = self.outcome[warm is not None]
+        result = {"tube": self.tube, "success": ok, "warm_start": warm is not None, "distance": dist,
+                  "status": "Solve_Succeeded" if ok else "Maximum_Iterations_Exceeded",
+                  "iterations": 7 if warm is not None else 9, "solve_time_s": 1.0 if warm is not None else 3.0}
+        return SimpleNamespace(result=result, warm={"tube": self.tube, "x0": np.full(3, dist)})
 
 
-def test_warm_sweep_starts_solve_cold_only_after_a_failed_warm_start(monkeypatch):
-    """[options] sweep_starts = "warm": a converged warm start is kept without a cold solve; a
-    failed one is solved again from the training fit; an unknown value is refused by name."""
-    from latentoc.solve import SolveError
-
-    calls = []
-    problem = _patched(monkeypatch, calls, lambda warm, tube: (not (warm and tube == 0.08), 0.8), sweep_starts="warm")
-    jp.solve_jump_problem(problem, tube=0.04)
-    second = jp.solve_jump_problem(problem, tube=0.08).result
-    third = jp.solve_jump_problem(problem, tube=0.16).result
-    assert calls == [False, True, False, True]
-    assert not second["warm_start"] and second["other_start"]["status"] == "Maximum_Iterations_Exceeded"
-    assert third["warm_start"] and "other_start" not in third
-    bad_calls = []
-    bad = _patched(monkeypatch, bad_calls, lambda warm, tube: (True, 0.8), sweep_starts="cold")
-    with pytest.raises(SolveError, match="sweep_starts must be one of"):
-        jp.solve_jump_problem(bad, tube=0.04)
-    assert bad_calls == [] and jp._SETUP_CACHE == {}  # refused before set-up and solve
-
-
-def test_multipliers_of_another_layout_are_refused_by_name(monkeypatch):
-    """Warm-start multipliers (or their x0) whose sizes do not fit the built NLP are an error
-    naming ``duals`` and the sizes, before any solve."""
-    built = []
-    nlp = type("N", (), {"x0": np.zeros(3), "lbg": np.zeros(2)})()
-    monkeypatch.setattr(jp, "initial_guess", lambda js, s: {})
-    monkeypatch.setattr(jp, "build_nlp", lambda *a, warm_start=False: built.append(warm_start) or nlp)
-    js = type("JS", (), {k: None for k in ("model", "smap", "gpdm", "geom", "phases", "limits", "sym")})()
-    for x0, duals in [(np.zeros(3), (np.zeros(5), np.zeros(3))), (np.zeros(3), (np.zeros(2), np.zeros(4))),
-                      (np.zeros(4), (np.zeros(2), np.zeros(3))), (None, (np.zeros(2), np.zeros(3)))]:
-        with pytest.raises(ValueError, match=r"duals: \(lam_g, lam_x\) of sizes .* \(2 rows, 3 variables\)"):
-            jp.solve_broad_jump(js, jp.JumpSettings(), x0=x0, duals=duals)
-    assert built == [True] * 4
+def test_warm_and_cold_starts_keep_the_better_jump():
+    """With a warm start and sweep_starts "warm+cold", the tube is solved from the warm start and
+    from the training fit; the better jump (converged first, then farther) is kept and the other
+    reported in other_start. Without a warm start only the cold solve runs."""
+    warm = {"tube": 0.04, "x0": np.zeros(3)}
+    cold_only = _Solves(0.04, {False: (True, 0.9)})
+    sol = jp.solve_from_starts(cold_only, None, "warm+cold")
+    assert cold_only.calls == [None] and "other_start" not in sol.result
+    # the warm start fails: the cold one is kept
+    s = _Solves(0.08, {True: (False, 0.99), False: (True, 0.9)})
+    sol = jp.solve_from_starts(s, warm, "warm+cold")
+    assert s.calls == [warm, None] and not sol.result["warm_start"] and sol.result["distance"] == 0.9
+    assert sol.result["other_start"] == {"warm_start": True, "status": "Maximum_Iterations_Exceeded",
+                                         "iterations": 7, "solve_time_s": 1.0, "distance": 0.99}
+    # both converge: the farther is kept, whichever start it came from
+    for outcome, kept_warm in (({True: (True, 0.85), False: (True, 0.95)}, False),
+                               ({True: (True, 0.99), False: (True, 0.97)}, True)):
+        s = _Solves(0.16, outcome)
+        sol = jp.solve_from_starts(s, warm, "warm+cold")
+        assert s.calls == [warm, None] and sol.result["warm_start"] is kept_warm
+        assert sol.result["distance"] == outcome[kept_warm][1]
+        assert sol.result["other_start"]["warm_start"] is not kept_warm
+        assert sol.result["other_start"]["distance"] == outcome[not kept_warm][1]
+    # neither converges: still the farther
+    s = _Solves(0.32, {True: (False, 0.5), False: (False, 0.6)})
+    assert not jp.solve_from_starts(s, warm, "warm+cold").result["warm_start"]
 
 
-def test_unknown_option_is_refused_by_name():
-    """A typo in [options] is an error naming the key, before any set-up or solve."""
-    from latentoc.solve import SolveError
+def test_warm_sweep_starts_solve_cold_only_after_a_failed_warm_start():
+    """sweep_starts "warm": a converged warm start is kept without a cold solve; a failed one is
+    solved again from the training fit (and the better kept)."""
+    warm = {"tube": 0.04, "x0": np.zeros(3)}
+    s = _Solves(0.08, {True: (True, 0.8), False: (True, 0.9)})
+    sol = jp.solve_from_starts(s, warm, "warm")
+    assert s.calls == [warm] and sol.result["warm_start"] and "other_start" not in sol.result
+    s = _Solves(0.08, {True: (False, 0.8), False: (True, 0.7)})
+    sol = jp.solve_from_starts(s, warm, "warm")
+    assert s.calls == [warm, None] and not sol.result["warm_start"]
+    assert sol.result["other_start"]["status"] == "Maximum_Iterations_Exceeded"
 
+
+def test_a_warm_start_is_taken_from_a_smaller_solved_tube_only():
+    """A previous Solution's warm start serves a tube at least as large as its own; a failed solve
+    (warm None) or a larger tube gives none."""
+    prev = SimpleNamespace(warm={"tube": 0.04, "x0": np.zeros(3)})
+    assert jp.usable_warm_start(prev, 0.04) is prev.warm and jp.usable_warm_start(prev, 0.08) is prev.warm
+    assert jp.usable_warm_start(prev, 0.02) is None
+    assert jp.usable_warm_start(SimpleNamespace(warm=None), 0.08) is None
+    assert jp.usable_warm_start(None, 0.08) is None
+
+
+def test_warm_start_carries_the_point_and_multipliers_of_phase_2(small_jump):
+    """JumpSolution.warm_start: the tube, the solution's point and its multipliers (lam_g, lam_x),
+    what the next tube's solve starts from."""
+    jn = small_jump.nlp
+    rng = np.random.default_rng(0)
+    x, lam_g, lam_x = small_jump.x0, rng.standard_normal(jn.nlp.m), rng.standard_normal(jn.variables.n)
+    run = IpoptResult(x=x, f=0.0, g=jn.nlp.constraints(x), lam_g=lam_g, lam_x=lam_x, status="Solve_Succeeded",
+                      success=True, iterations=3, time_s=0.1)
+    warm = JumpSolution(jn, x, run, None, {"tube": 0.02}).warm_start()
+    assert warm["tube"] == 0.02
+    for key, value in (("x0", x), ("lam_g0", lam_g), ("lam_x0", lam_x)):
+        np.testing.assert_array_equal(warm[key], value)
+
+
+def test_a_warm_start_that_does_not_fit_the_nlp_is_refused_by_name(small_jump):
+    """A warm start whose point has another number of variables than the NLP is a ValueError
+    naming the warm start and both sizes, before any solve."""
+    sj = small_jump
+    n, m = sj.nlp.variables.n, sj.nlp.nlp.m
+    bad = {"tube": 0.02, "x0": np.zeros(n + 3), "lam_g0": np.zeros(m), "lam_x0": np.zeros(n + 3)}
+    with pytest.raises(ValueError, match="warm start: its point") as exc:
+        solve_jump(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init, warm=bad)
+    assert str(n + 3) in str(exc.value) and str(n) in str(exc.value)
+
+
+def test_packaged_options_set_the_jump_settings():
+    """The packaged problem's [options] are all known and set their JumpSettings fields."""
     problem = load_problem("broad-jump")
-    jp.check_options(problem)  # the packaged problem uses known keys only
-    bad = dataclasses.replace(problem, options={**problem.options, "n_flihgt": 80})
-    with pytest.raises(SolveError, match=r"unknown \[options\] key\(s\) \['n_flihgt'\]"):
-        jp.solve_jump_problem(bad, tube=0.02)
-    with pytest.raises(SolveError, match="n_flihgt"):
+    jp.check_options(problem)
+    s = jp.settings_from_problem(problem, 0.02)
+    o = problem.options
+    assert isinstance(s, JumpSettings) and s.tube == 0.02 and s.mu == o["friction"]
+    for key, field in jp.OPTIONS.items():
+        if field is not None and key in o:
+            assert getattr(s, field) == o[key], key
+    assert s.n_control == problem.control_points and s.hessian == "exact"
+    assert jp.settings_from_problem(problem, 0.02, "lbfgs").hessian == "lbfgs"
+
+
+@pytest.mark.parametrize("key", ["n_flihgt", "time_scale", "base_model", "contact_model", "knot_nodes",
+                                 "push_off_nodes"])
+def test_unknown_or_removed_option_is_refused_by_name(key):
+    """A typo in [options], or an option of the removed toe-pinned base, contact models, knot or
+    push-off nodes and free time scale, is an error naming the key, before any set-up or solve."""
+    bad = _with_options(**{key: 1})
+    n_setups = len(jp._SETUP_CACHE)
+    with pytest.raises(SolveError, match=rf"unknown \[options\] key\(s\) \['{key}'\]"):
+        jp.solve_jump_problem(bad, tube=0.02, control_points=17)
+    with pytest.raises(SolveError, match=key):
         jp.settings_from_problem(bad, 0.02, None)
+    assert len(jp._SETUP_CACHE) == n_setups  # refused before the set-up
+
+
+def test_bad_sweep_starts_is_refused_by_name():
+    bad = _with_options(sweep_starts="cold")
+    n_setups = len(jp._SETUP_CACHE)
+    with pytest.raises(SolveError, match=r"\[options\] sweep_starts must be one of \('warm\+cold', 'warm'\), "
+                                         r"got 'cold'"):
+        jp.solve_jump_problem(bad, tube=0.02, control_points=17)
+    assert len(jp._SETUP_CACHE) == n_setups  # refused before the set-up
+
+
+def test_unsupported_method_and_hessian_are_refused_by_name():
+    problem = load_problem("broad-jump")
+    with pytest.raises(SolveError, match="broad-jump supports method 'latent' only, got 'joint-range'"):
+        jp.solve_jump_problem(problem, tube=0.02, method="joint-range")
+    with pytest.raises(SolveError, match="broad-jump supports hessian 'exact' or 'lbfgs', got 'bfgs'"):
+        jp.solve_jump_problem(problem, tube=0.02, hessian="bfgs")
+
+
+@pytest.mark.parametrize("stride", [0, 2.5, 100, "2"])
+def test_bad_training_stride_is_refused_by_name(stride):
+    bad = _with_options(training_stride=stride)
+    with pytest.raises(SolveError, match=r"training_stride: training stride must be an integer from 1 to 39"):
+        jp.solve_jump_problem(bad, tube=0.02)
 
 
 @pytest.mark.parametrize("training, stride, n_points", [(0, 3, 53), ("all", 10, 160)])
@@ -145,13 +177,3 @@ def test_training_stride_learns_every_kth_frame(training, stride, n_points):
     tube = gp.tube_size()
     assert all(np.max(gp.variance(T)) <= tube for T in gp.latent_trajectories())
     assert js.init["P"].shape == (21, 3) and np.all(np.isfinite(js.init["P"]))
-
-
-@pytest.mark.parametrize("stride", [0, 2.5, 100, "2"])
-def test_bad_training_stride_is_refused_by_name(stride):
-    from latentoc.solve import SolveError
-
-    problem = load_problem("broad-jump")
-    bad = dataclasses.replace(problem, options={**problem.options, "training_stride": stride})
-    with pytest.raises(SolveError, match=r"training_stride: training stride must be an integer from 1 to 39"):
-        jp.solve_jump_problem(bad, tube=0.02)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict, dataclass, field, fields
+from typing import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -27,7 +28,8 @@ from .solve import JumpSolution, solve_jump
 from .torque_limits import TrainingDynamics, estimate_training_dynamics
 from .training import JumpTraining, jump_model, training_jumps
 
-__all__ = ["JumpSetup", "setup", "solve_jump_problem", "settings_from_problem", "OPTIONS"]
+__all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
+           "settings_from_problem", "OPTIONS"]
 
 PATH_SMOOTHING = 1e-3  # weight of int ||x''||^2 dt in the initial latent path fit
 
@@ -166,6 +168,30 @@ def _better(a: dict, b: dict) -> bool:
     return (a["success"], a["distance"]) > (b["success"], b["distance"])
 
 
+def usable_warm_start(warm_start, delta: float) -> dict | None:
+    """What a Solution of this problem at another tube offers a solve at tube ``delta``: its
+    ``warm`` when it was solved at a tube no larger than delta, else None."""
+    if warm_start is not None and warm_start.warm and warm_start.warm.get("tube", np.inf) <= delta:
+        return warm_start.warm
+    return None
+
+
+def solve_from_starts(solve: Callable[[dict | None], JumpSolution], warm: dict | None,
+                      sweep_starts: str = SWEEP_STARTS[0]) -> JumpSolution:
+    """``solve(warm)``; with a warm start, also ``solve(None)`` (from the training fit) when
+    ``sweep_starts`` is "warm+cold" or the warm solve failed: a warm start can stay in a worse
+    local optimum than a cold one. The better jump is kept, the other reported in its result's
+    ``other_start``."""
+    sol = solve(warm)
+    if warm is not None and (sweep_starts == "warm+cold" or not sol.result["success"]):
+        cold = solve(None)
+        sol, other = (cold, sol) if _better(cold.result, sol.result) else (sol, cold)
+        ro = other.result
+        sol.result["other_start"] = {"warm_start": ro["warm_start"],
+                                     **{k: ro[k] for k in ("status", "iterations", "solve_time_s", "distance")}}
+    return sol
+
+
 def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=None, hessian=None,
                        method: str = "latent", joint_range_deg=None, gpdm=None, verbose: bool = False,
                        warm_start=None):
@@ -204,18 +230,9 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     t1 = time.perf_counter()
     blocks = js.blocks(robot)
     compile_time = time.perf_counter() - t1
-    warm = None
-    if warm_start is not None and warm_start.warm and warm_start.warm.get("tube", np.inf) <= delta:
-        warm = warm_start.warm
-    sol = solve_jump(robot, layer, blocks, js.phases, s, js.init, warm=warm, verbose=verbose)
-    if warm is not None and (o.get("sweep_starts", SWEEP_STARTS[0]) == "warm+cold" or not sol.result["success"]):
-        # a warm start can stay in a worse local optimum than a cold one: solve from the training
-        # fit too and keep the better jump, reporting the other
-        cold = solve_jump(robot, layer, blocks, js.phases, s, js.init, verbose=verbose)
-        sol, other = (cold, sol) if _better(cold.result, sol.result) else (sol, cold)
-        ro = other.result
-        sol.result["other_start"] = {"warm_start": ro["warm_start"],
-                                     **{k: ro[k] for k in ("status", "iterations", "solve_time_s", "distance")}}
+    sol = solve_from_starts(lambda warm: solve_jump(robot, layer, blocks, js.phases, s, js.init, warm=warm,
+                                                    verbose=verbose),
+                            usable_warm_start(warm_start, delta), o.get("sweep_starts", SWEEP_STARTS[0]))
     traj = trajectory(robot, layer, js.phases, sol)
     checks = verify(js.model, traj, s.mu)
     r = sol.result
