@@ -1,9 +1,10 @@
-"""The exporter's contact forces between the NLP's nodes (latentoc.jump.problem.balanced_edge_weights)."""
+"""The 1 kHz export (latentoc.jump.export): its motion's derivatives and the contact forces between
+the NLP's nodes (balanced_edge_weights)."""
 import numpy as np
 import pinocchio as pin
 
 from latentoc.jump.contact import FootGeometry, generator_columns, point_jacobians
-from latentoc.jump.problem import balanced_edge_weights
+from latentoc.jump.export import balanced_edge_weights
 from latentoc.jump.training import jump_model, training_jumps
 
 
@@ -44,3 +45,21 @@ def test_a_pulling_wrench_is_balanced_outside_the_cone():
     lam = balanced_edge_weights(C, t, np.zeros(6), free, -1e4 * np.ones(model.nv - 6), 1e4 * np.ones(model.nv - 6))
     np.testing.assert_allclose(C[[0, 2, 4]] @ lam, t[[0, 2, 4]], rtol=1e-8, atol=1e-6)
     assert lam.min() < 0
+
+
+def test_exported_velocity_and_acceleration_are_derivatives_of_the_motion(small_jump, small_export):
+    """On the 1 kHz grid the exported v and a are the time derivatives of q (central differences,
+    pinocchio.difference) in the stance, the flight and the landing, and the joint motion is the GP
+    layer's along the exported control points."""
+    tr, model = small_export, small_jump.js.model
+    t, Q, V, A = tr["t"], tr["q"], tr["v"], tr["a"]
+    h = t[1] - t[0]
+    assert np.isclose(h, 1e-3) and np.isclose(t[-1], small_jump.js.phases.duration)
+    for i in (100, 200, 450, 550, 1000, 1250):  # stance, flight, landing
+        vd = pin.difference(model, Q[i - 1], Q[i + 1]) / (2 * h)
+        np.testing.assert_allclose(vd, V[i], atol=2e-3 * max(1.0, np.abs(V[i]).max()))
+        np.testing.assert_allclose((V[i + 1] - V[i - 1]) / (2 * h), A[i], atol=2e-2 * max(1.0, np.abs(A[i]).max()))
+    np.testing.assert_array_equal(tr["control_points"], small_jump.js.init["P"])
+    y = small_jump.layer.motion(np.hstack([small_jump.nlp.splines[0].evaluate(tr["control_points"], t[[300]], k)
+                                           for k in range(3)])).y[0]
+    np.testing.assert_allclose(Q[300], small_jump.js.smap.to_full(y, Q[300][:7]), atol=1e-12)

@@ -1,287 +1,374 @@
-"""Row blocks of the broad-jump NLP against numeric Pinocchio on the exported motion."""
+"""The broad jump's row families (latentoc.jump.rows) against numeric Pinocchio.
+
+Contact, wrench-sample, pitch-integration, takeoff and touchdown rows are read from the
+assembled NLP (so the node inputs are checked with the blocks) at the training start of a
+jump with few nodes: the joint motion of the GP layer along the training fit's latent path,
+the contact phases' base splines fitted to the captured base. Flight rows are checked on the
+1 kHz export of that start. References: ``pinocchio.rnea`` (with the point forces as external
+forces), frame placements and Jacobians, the COM, the centroidal momentum and its rate, the
+mass matrix (:mod:`jump_reference`).
+"""
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
-import pytest
+from scipy.integrate import cumulative_trapezoid
 
-from latentoc.jump.contact import TOE_PAD, foot_points, point_jacobians
-from latentoc.jump.problem import consistent_start, initial_guess, trajectory
-from latentoc.jump.support_polygon import polygon_from_vertices
-from latentoc.jump.transcription import JumpSettings, RowModel, build_nlp, node_rows
-from latentoc.jump.verify import sagittal_contact_wrench
+from jump_reference import (SAGITTAL, flight_base, foot_points, full_state, generalized_force, joint_motion,
+                            mass_of, momentum, pitch_rate_for, point_forces, polygon_rows)
+from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
+from latentoc.jump.contact import TOE_PAD
+from latentoc.jump.nlp import build_nlp
 from latentoc.jump.zmp import G
 
+GRAVITY = np.array([0.0, -9.81])
 
-def test_wrench_rows_are_the_cone_of_the_needed_wrench(jump_setup):
-    """wrench_rows at stance and landing samples: the needed wrench of numeric pinocchio.rnea
-    on the exported 1 kHz motion (verify.sagittal_contact_wrench), its cone and its centre of
-    pressure rows, in body weights, and the torques of the joints no foot force enters."""
-    js = jump_setup
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, base_model="pinned")
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    x = consistent_start(nlp, nlp.x0)
-    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(x))}
-    tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
-    mass = sum(i.mass for i in js.model.inertias)
-    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "pinned")
-    block, layout = node_rows(rm, jit=False, optional=("wrench_rows",))["wrench_rows"]
-    sp, sps, spl = nlp.meta["splines"]
-    ph, d = js.phases, js.model.createData()
-    ids = [js.model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")]
-    checked = 0
-    for i in (40, 150, 290, 720, 900, 1250):  # ms: stance (heel, ball, toe loaded), landing
-        t = tr["t"][i]
-        land = t >= ph.touchdown
-        X = [sp.evaluate(parts["P"], np.array([t]), k)[0] for k in range(3)]
-        phs, off = (spl, ph.touchdown) if land else (sps, 0.0)
-        coef = parts["phi_l"] if land else parts["phi_s"]
-        f = [phs.evaluate(coef, np.array([t - off]), k)[0, 0] for k in range(3)]
-        u = np.concatenate([*X, f, [float(parts["x_L"].ravel()[0]) if land else 0.0]])
-        r = np.array(block.rows(u)).ravel()
-        q, v, a = tr["q"][i], tr["v"][i], tr["a"][i]
-        tau = pin.rnea(js.model, d, q, v, a)
-        pin.computeJointJacobians(js.model, d, q)
-        pin.framesForwardKinematics(js.model, d, q)
-        J = sum(pin.getFrameJacobian(js.model, d, k, pin.LOCAL_WORLD_ALIGNED) for k in ids)
-        wrench = sagittal_contact_wrench(J, tau)
-        fx, _, fz, _, my, _ = wrench / (mass * G)
-        # the same sagittal wrench as point forces, split two ways (heel + toe tip, ball + toe
-        # tip): the torques of the joints no foot force enters do not change, the legs' do
-        Jp = point_jacobians(js.model, d, q, js.geom)
+
+def family(jn, name: str) -> slice:
+    """The rows of row family ``name`` in the NLP's constraint vector."""
+    off = jn.nlp.row_offset[name]
+    return slice(off, off + next(f.n_rows for f in jn.nlp.families if f.name == name))
+
+
+def parts_of(g, names, part, n):
+    """The rows named ``part`` in order, as (nodes x n)."""
+    return g[names == part].reshape(-1, n)
+
+
+def contact_base(sj, parts, t):
+    """(b, bd, bdd) of the contact phase's base spline at time t."""
+    ph = sj.js.phases
+    _, sps, spl = sj.nlp.splines
+    if t >= ph.touchdown - 1e-12:
+        return [spl.evaluate(parts["base_land"], np.array([t - ph.touchdown]), k)[0] for k in range(3)]
+    return [sps.evaluate(parts["base_stance"], np.array([min(t, ph.takeoff)]), k)[0] for k in range(3)]
+
+
+def state_at(sj, parts, t):
+    """Numeric q, v, a of a contact time: the GP layer's joint motion and the base spline."""
+    y, yd, ydd = (u[0] for u in joint_motion(sj.layer, sj.nlp.splines[0], sj.nlp.control_points(sj.x0), t))
+    return full_state(sj.js.smap, *contact_base(sj, parts, t), y, yd, ydd)
+
+
+def with_lam(sj, x, lam):
+    x = np.array(x, float)
+    x[sj.nlp.variables.index("lam")] = lam
+    return x
+
+
+def test_contact_rows_match_numeric_pinocchio(small_jump):
+    """At every contact node (stance and landing): the dynamics rows are the sagittal base rows of
+    numeric rnea minus sum J^T f of the point forces (random edge weights, body weights), the
+    torque rows the joint torques over their limit range (kept joints), the toe tip's offset from
+    its ground point (0 in the stance, x_L in the landing), the heel and ball heights and, once
+    settled, the projected COM in the feet's polygon, all from numeric Pinocchio on the same
+    state; with edge weights that balance the base rows exactly, the ZMP rows are the normal force
+    times the polygon rows of the ZMP of the centroidal momentum rate on the toe tip's plane."""
+    sj = small_jump
+    model, js, robot = sj.js.model, sj.js, sj.robot
+    data = model.createData()
+    jn, ph, W = sj.nlp, js.phases, robot.weight
+    tc = np.concatenate([jn.grid["stance"], jn.grid["land"]])
+    nS, nC = len(jn.grid["stance"]), len(tc)
+    kept, act, scale = robot.unmirrored, robot.active, robot.torque_scale
+    lam = np.random.default_rng(0).uniform(0.0, 0.2, (nC, 6))
+    x = with_lam(sj, sj.x0, lam)
+    parts = jn.variables.unpack(x)
+    sl = family(jn, "contact")
+    g, names = jn.nlp.constraints(x)[sl], jn.row_names[sl]
+    rows = {"dynamics": parts_of(g, names, "dynamics", 3), "torque": parts_of(g, names, "torque", len(kept)),
+            "ball_height": parts_of(g, names, "ball_height", 1)[:, 0],
+            "toe_position": parts_of(g, names, "toe_position", 2),
+            "heel_height": parts_of(g, names, "heel_height", 1)[:, 0],
+            "com_polygon": parts_of(g, names, "com_polygon", 4)}
+    settled = np.where((np.arange(nC) >= nS) & (tc >= ph.settle - 1e-9))[0]
+    assert len(rows["dynamics"]) == nC and len(rows["com_polygon"]) == len(settled) > 0
+    # the balanced edge weights: least norm, all six edges (the reference's own J^T f)
+    lam_bal = np.zeros((nC, 6))
+    states = []
+    for k, t in enumerate(tc):
+        q, v, a = state_at(sj, parts, t)
+        states.append((q, v, a))
+        tau = pin.rnea(model, data, q, v, a)
+        gen = generalized_force(model, data, q, js.geom.heel_offset, point_forces(lam[k] * W, robot.mu))
+        np.testing.assert_allclose(rows["dynamics"][k], (tau - gen)[SAGITTAL] / W, atol=1e-9)
+        tj = (tau - gen)[6:][act[kept]]
+        np.testing.assert_allclose(rows["torque"][k], tj / scale[kept], atol=1e-9 * max(1.0, np.abs(tj).max()))
+        heel, ball, toe = foot_points(model, data, q, js.geom.heel_offset).T
+        x_pin = parts["x_L"][0] if k >= nS else 0.0
+        np.testing.assert_allclose(rows["toe_position"][k], [toe[0] - x_pin, toe[2]], atol=1e-10)
+        np.testing.assert_allclose([rows["heel_height"][k], rows["ball_height"][k]], [heel[2], ball[2]], atol=1e-10)
+        if k in settled:
+            com = pin.centerOfMass(model, data, q)
+            np.testing.assert_allclose(rows["com_polygon"][list(settled).index(k)], polygon_rows(heel, toe, com),
+                                       atol=1e-10)
+        C = np.column_stack([generalized_force(model, data, q, js.geom.heel_offset, point_forces(e * W, robot.mu))
+                             for e in np.eye(6)])[SAGITTAL]
+        lam_bal[k] = np.linalg.lstsq(C, tau[SAGITTAL], rcond=None)[0]
+    # a realistic start: forces of a few body weights in all, the feet on the ground within 2 cm
+    assert np.all(np.abs(rows["toe_position"][:, 1]) < 0.02) and 0.1 < np.abs(lam_bal).sum(1).max() < 10
+    xb = with_lam(sj, sj.x0, lam_bal)
+    gb = jn.nlp.constraints(xb)[sl]
+    np.testing.assert_allclose(parts_of(gb, names, "dynamics", 3), 0.0, atol=1e-10)
+    zmp_rows = parts_of(gb, names, "zmp_polygon", 4)
+    assert len(zmp_rows) == nC - nS
+    for j, k in enumerate(range(nS, nC)):
+        q, v, a = states[k]
+        heel, _, toe = foot_points(model, data, q, js.geom.heel_offset).T
+        dh = pin.computeCentroidalMomentumTimeVariation(model, data, q, v, a).vector
+        c = pin.centerOfMass(model, data, q)
+        fz = dh[2] + mass_of(model) * G  # both feet
+        zmp_x = c[0] - ((c[2] - toe[2]) * dh[0] + dh[4]) / fz
+        assert np.isclose(2 * lam_bal[k].sum() * W, fz)  # each pyramid edge carries its weight in fz
+        np.testing.assert_allclose(zmp_rows[j], fz / (2 * W) * polygon_rows(heel, toe, [zmp_x, 0.0]), atol=1e-9)
+
+
+def test_wrench_rows_are_the_cone_of_the_needed_wrench(small_jump):
+    """At every wrench sample: the sagittal base rows of numeric rnea solved for the (fx, fz, my)
+    of each toe tip (body weights), its cone rows and the centre-of-pressure row of the rearmost
+    point the contact schedule loads (heel, ball or the toe pad), and the torques of the joints no
+    foot force enters over their limit range. Those joints' torques do not depend on how the
+    wrench is split into point forces (two splits of the same wrench agree there, not in the legs)."""
+    sj = small_jump
+    model, js, robot = sj.js.model, sj.js, sj.robot
+    data = model.createData()
+    jn, ph, W, mu = sj.nlp, js.phases, robot.weight, robot.mu
+    parts = jn.variables.unpack(sj.x0)
+    sl = family(jn, "wrench")
+    g, names = jn.nlp.constraints(sj.x0)[sl], jn.row_names[sl]
+    tw = jn.meta["wrench_times"]
+    K = len(tw)
+    ff = robot.force_free
+    free_kept = np.intersect1d(ff, robot.unmirrored)
+    back_names = names[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
+    back = g[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
+    rows = {"wrench_normal": parts_of(g, names, "wrench_normal", 1)[:, 0],
+            "wrench_friction": parts_of(g, names, "wrench_friction", 2), "cop_front": parts_of(g, names, "cop_front", 1)[:, 0],
+            "torque_free": parts_of(g, names, "torque_free", len(free_kept))}
+    assert len(back) == len(rows["cop_front"]) == K > 10
+    ids = [model.getFrameId(n) for n in ("ltoes_end", "rtoes_end")]
+    for k, t in enumerate(tw):
+        q, v, a = state_at(sj, parts, t)
+        tau = pin.rnea(model, data, q, v, a)
+        pin.computeJointJacobians(model, data, q)
+        pin.framesForwardKinematics(model, data, q)
+        J = sum(pin.getFrameJacobian(model, data, i, pin.LOCAL_WORLD_ALIGNED) for i in ids)
+        wrench = np.zeros(6)
+        wrench[SAGITTAL] = np.linalg.solve(J.T[np.ix_(SAGITTAL, SAGITTAL)], tau[SAGITTAL])
+        np.testing.assert_allclose((J.T @ wrench)[:6], tau[:6], atol=1e-9 * np.abs(tau[:6]).max())
+        fx, _, fz, _, my, _ = wrench / W
+        heel, ball, toe = foot_points(model, data, q, js.geom.heel_offset).T
+        loaded = [ph.loaded(p, np.array([t]))[0] for p in ("heel", "ball")]
+        which, rear = (("cop_heel", heel[0]) if loaded[0] else ("cop_ball", ball[0]) if loaded[1]
+                       else ("cop_pad", toe[0] - TOE_PAD))
+        assert back_names[k] == which
+        tol = 1e-9 * max(1.0, abs(fz), abs(my))
+        assert abs(rows["wrench_normal"][k] - fz) < tol and abs(rows["cop_front"][k] - my) < tol
+        np.testing.assert_allclose(rows["wrench_friction"][k], [mu * fz - fx, mu * fz + fx], atol=tol)
+        np.testing.assert_allclose(back[k], (toe[0] - rear) * fz - my, atol=tol)
+        # no foot force enters these joints: their torque is the motion's alone
+        assert len(ff) == 30 and np.all(J[:, 6 + robot.active[ff]] == 0)
+        tf = tau[6:][robot.active[free_kept]]
+        np.testing.assert_allclose(rows["torque_free"][k], tf / robot.torque_scale[free_kept],
+                                   atol=1e-9 * max(1.0, np.abs(tf).max()))
         split = []
-        for back in (0, 1):
-            C = np.column_stack([Jp[back].T[:, [0, 2]], Jp[2].T[:, 2]])  # (fx, fz) at back, fz at toe
-            f = np.linalg.solve(C[[0, 2, 4]], (J.T @ wrench)[[0, 2, 4]])
-            split.append((tau - C @ f)[6:][rm.active])
-        ff = rm.force_free
-        assert len(ff) == 30 and np.all(J[:, 6 + rm.active[ff]] == 0)
-        assert np.allclose(split[0][ff], split[1][ff], atol=1e-6)
+        for b in (0, 1):  # the wrench as (fx, fz) at the heel or the ball and fz at the toe tip
+            unit = []
+            for point, axis in ((b, 0), (b, 1), (2, 1)):
+                f = np.zeros((3, 2))
+                f[point, axis] = 1.0
+                unit.append(generalized_force(model, data, q, js.geom.heel_offset, f))
+            C = np.column_stack(unit)
+            sol = np.linalg.solve(C[SAGITTAL], (J.T @ wrench)[SAGITTAL])
+            split.append((tau - C @ sol)[6:][robot.active])
+        np.testing.assert_allclose(split[0][ff], split[1][ff], atol=1e-6)
         assert np.max(np.abs(np.delete(split[0] - split[1], ff))) > 1.0
-        heel, ball, toe = foot_points(js.model, d, js.geom).T
-        expected = {"wrench_normal": [fz], "wrench_friction": [s.mu * fz - fx, s.mu * fz + fx], "cop_front": [my],
-                    "cop_heel": [(toe[0] - heel[0]) * fz - my], "cop_ball": [(toe[0] - ball[0]) * fz - my],
-                    "cop_pad": [TOE_PAD * fz - my],
-                    # N m: the joints no foot force enters, numeric RNEA's torques
-                    "torque_free": tau[6:][rm.active[ff]]}
-        for name, val in expected.items():
-            assert np.allclose(r[layout[name]], val, atol=1e-6 * max(1.0, abs(fz), np.max(np.abs(val)))), (t, name)
-        checked += 1
-    assert checked == 6
 
 
-def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(jump_setup):
-    """With wrench_spacing the NLP gains one sample row set per interval slot, one just inside each
-    unloaded interval of the schedule and one at each spline breakpoint of a contact phase (the
-    splines' accelerations kink there); none at a node, and the rearmost support follows the
-    contact schedule (heel, then ball, then toe pad)."""
-    js = jump_setup
-    base = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, knot_nodes=True)
-    dense = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, wrench_spacing=0.02)
-    n0, n1 = (build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, st, initial_guess(js, st), js.sym)
-              for st in (base, dense))
-    names = np.array(n1.names)
-    assert not any(k.startswith(("wrench_", "cop_")) for k in n0.names)
+def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(small_jump):
+    """The wrench samples lie strictly between the contact nodes of the stance and the landing:
+    the even samples of each interval, one just inside each unloaded interval of the contact
+    schedule and one at each spline breakpoint inside a contact phase, none at a node; the
+    rearmost support follows the schedule; without wrench samples the NLP has none of their rows."""
+    sj = small_jump
+    jn, ph, robot = sj.nlp, sj.js.phases, sj.robot
+    names = jn.row_names
+    n0 = build_nlp(robot, sj.layer, sj.blocks, ph, sj.settings, sj.js.init["P"], "feasibility", wrench_samples=False)
+    assert not any(str(k).startswith(("wrench_", "cop_", "torque_free")) for k in n0.row_names)
+    assert "wrench" not in n0.nlp.row_offset and n0.variables.n == jn.variables.n
+    tw, grid, spacing = jn.meta["wrench_times"], jn.grid, sj.settings.wrench_spacing
     n_samples = int((names == "wrench_normal").sum())
-    grid, tw = n1.meta["grid"], n1.meta["wrench_times"]
-    ph = js.phases
     nodes = np.concatenate([grid["stance"], grid["land"]])
     assert len(tw) == n_samples and np.all(np.diff(tw) > 0)
     assert np.min(np.abs(tw[:, None] - nodes[None]), axis=1).min() > 1e-4
     assert np.all((tw < ph.takeoff) | (tw > ph.touchdown)) and tw.min() > 0 and tw.max() < ph.duration
-    # every interval of 0.02 s spacing gets its even samples (linspace, ends excluded)
     for tn in (grid["stance"], grid["land"]):
         for a, b in zip(tn[:-1], tn[1:]):
-            k = int(np.ceil((b - a) / 0.02 - 1e-9))
+            k = int(np.ceil((b - a) / spacing - 1e-9))
             for tk in np.linspace(a, b, k + 1)[1:-1]:
                 assert np.min(np.abs(tw - tk)) < 1e-12
-    switches = ph.switch_samples()  # one sample just inside each unloaded interval of the schedule
+    switches = ph.switch_samples()
     assert len(switches) == 4 and np.allclose(switches, [ph.heel_off + 5e-4, ph.ball_off + 5e-4,
                                                          ph.ball_strike - 5e-4, ph.heel_strike - 5e-4])
     assert not any(ph.loaded(p, np.array([tk]))[0] for tk, p in zip(switches, ("heel", "ball", "ball", "heel")))
-    sp, sps, spl = n1.meta["splines"]
-    knots = np.concatenate([sp.breakpoints, sps.breakpoints, ph.touchdown + spl.breakpoints])
+    sp_, sps, spl = jn.splines
+    knots = np.concatenate([sp_.breakpoints, sps.breakpoints, ph.touchdown + spl.breakpoints])
     knots = knots[((knots > 0) & (knots < ph.takeoff)) | ((knots > ph.touchdown) & (knots < ph.duration))]
     assert len(knots) > 10
     for tk in np.concatenate([switches, knots]):  # at a sample, or at a node already
         assert np.min(np.abs(np.concatenate([tw, nodes]) - tk)) <= 1e-4
-    # knot_nodes: the contact grid is the uniform one plus every breakpoint; without, the uniform one
-    uniform = ph.grid(5, 5, 6)
-    for key in ("stance", "flight", "land"):
-        assert np.array_equal(grid[key], uniform[key])
-    g = n0.meta["grid"]
-    c = np.concatenate([g["stance"], g["land"]])
-    assert np.all(np.diff(g["stance"]) > 1e-4) and np.all(np.diff(g["land"]) > 1e-4)
-    assert np.allclose(g["flight"], uniform["flight"])
-    for tk in np.concatenate([uniform["stance"], uniform["land"], knots]):
-        assert np.min(np.abs(c - tk)) <= 1e-4
-    added = len(c) - len(uniform["stance"]) - len(uniform["land"])
-    assert len(knots) - 3 <= added <= len(knots)
     assert (names == "wrench_friction").sum() == 2 * n_samples and (names == "cop_front").sum() == n_samples
-    n_back = sum(int((names == k).sum()) for k in ("cop_heel", "cop_ball", "cop_pad"))
-    assert n_back == n_samples and (names == "cop_pad").sum() > 0 and (names == "cop_heel").sum() > 0
-    # trunk, neck, head and left arm joints (the right arm's rows are its mirror copies)
+    back = names[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
+    heel, ball = ph.loaded("heel", tw), ph.loaded("ball", tw)
+    assert list(back) == ["cop_heel" if h else "cop_ball" if b else "cop_pad" for h, b in zip(heel, ball)]
+    assert {"cop_heel", "cop_ball", "cop_pad"} == set(back)
+    # trunk, neck, head and left arm joints (the right arm's rows are their mirror copies)
     assert (names == "torque_free").sum() == 18 * n_samples
-    mass = sum(i.mass for i in js.model.inertias)
-    with pytest.raises(ValueError, match="unknown optional row blocks"):
-        node_rows(RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, 0.4, mass), jit=False, optional=("wrench",))
 
 
-def test_right_torque_rows_left_out_are_mirror_copies_of_the_left(jump_setup):
+def test_takeoff_rows_are_the_stance_momentum(small_jump):
+    """The takeoff rows are the stance state's COM, COM velocity and angular momentum about the COM
+    (pinocchio.computeCentroidalMomentum) and pitch at takeoff minus the flight's takeoff
+    variables; the training start's flight variables are that state."""
+    sj = small_jump
+    model, jn, ph = sj.js.model, sj.nlp, sj.js.phases
+    data = model.createData()
+    var = jn.variables
+    x = np.array(sj.x0)
+    rng = np.random.default_rng(3)
+    for name in ("c_to", "cd_to", "L_to", "pitch_flight"):
+        x[var.index(name)] += 0.1 * rng.standard_normal(var.index(name).shape)
+    parts = var.unpack(x)
+    q, v, _ = state_at(sj, parts, ph.takeoff)
+    c, cd, L = momentum(model, data, q, v)
+    pitch = contact_base(sj, parts, ph.takeoff)[0][2]
+    expected = np.concatenate([c - parts["c_to"], cd - parts["cd_to"], [L - parts["L_to"][0]],
+                               [pitch - parts["pitch_flight"][0]]])
+    np.testing.assert_allclose(jn.nlp.constraints(x)[family(jn, "takeoff")], expected, atol=1e-10)
+    np.testing.assert_allclose(jn.nlp.constraints(sj.x0)[family(jn, "takeoff")], 0.0, atol=1e-10)
+
+
+def test_pitch_rate_keeps_the_angular_momentum(small_jump):
+    """The pitch-rate block gives the base pitch rate at which the centroidal angular momentum
+    (numeric Pinocchio) is its input L; the pitch-integration rows are the flight pitches minus
+    the takeoff pitch minus the trapezoid integral (scipy) of that pitch rate on the fine grid."""
+    sj = small_jump
+    model, jn, ph, smap = sj.js.model, sj.nlp, sj.js.phases, sj.js.smap
+    data = model.createData()
+    P = jn.control_points(sj.x0)
+    block = sj.blocks["pitch_rate"].functions["rows"]
+    rng = np.random.default_rng(4)
+    for t in np.linspace(0.05, 1.25, 5):
+        y, yd, ydd = (u[0] for u in joint_motion(sj.layer, jn.splines[0], P, t))
+        b, bd = rng.standard_normal(3), rng.standard_normal(3)
+        q, v, _ = full_state(smap, b, bd, np.zeros(3), y, yd, ydd)
+        L = momentum(model, data, q, v)[2]
+        assert np.isclose(float(block(y, yd, ydd, [L])), bd[2], rtol=1e-10, atol=1e-10)
+    parts = jn.variables.unpack(sj.x0)
+    tau, nsub = jn.meta["tau_fine"], jn.meta["flight_substeps"]
+    Y, Yd, _ = joint_motion(sj.layer, jn.splines[0], P, ph.takeoff + tau)
+    pd = np.array([pitch_rate_for(model, data, smap, Y[i], Yd[i], parts["L_to"][0]) for i in range(len(tau))])
+    integral = cumulative_trapezoid(pd, tau, initial=0.0)[::nsub]
+    pf = parts["pitch_flight"]
+    rows = jn.nlp.constraints(sj.x0)[family(jn, "pitch_integration")]
+    np.testing.assert_allclose(rows, pf[1:] - pf[0] - integral[1:], atol=1e-10)
+    np.testing.assert_allclose(rows, 0.0, atol=1e-10)  # the start integrates the same pitch rate
+
+
+def test_touchdown_rows_match_numeric_momentum_and_impact(small_jump):
+    """The touchdown rows: the flight's base pose at touchdown (the COM on its parabola, the angular
+    momentum kept; base from numeric COM and momentum) minus the landing's, and the inelastic
+    impact M_bb (v+ - v-) - (sum J^T Pi)_base in body weights, with Pinocchio's mass matrix
+    (crba) and the impulses as external forces through rnea."""
+    sj = small_jump
+    model, jn, ph, smap, robot = sj.js.model, sj.nlp, sj.js.phases, sj.js.smap, sj.robot
+    data = model.createData()
+    var = jn.variables
+    x = np.array(sj.x0)
+    x[var.index("lam_impact")] = np.random.default_rng(5).uniform(0.0, 1.0, 6)
+    parts = var.unpack(x)
+    y, yd, _ = (u[0] for u in joint_motion(sj.layer, jn.splines[0], jn.control_points(x), ph.touchdown))
+    T = ph.touchdown - ph.takeoff
+    c = parts["c_to"] + parts["cd_to"] * T + 0.5 * GRAVITY * T ** 2
+    cd = parts["cd_to"] + GRAVITY * T
+    bm, bdm = flight_base(model, data, smap, y, yd, parts["pitch_flight"][-1], parts["L_to"][0], c, cd)
+    bp, bdp, _ = contact_base(sj, parts, ph.touchdown)
+    q = full_state(smap, bp, bdp, np.zeros(3), y, yd, np.zeros_like(y))[0]
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    v_plus, v_minus = (base_to_freeflyer(bp, bd)[1][0] for bd in (bdp, bdm))
+    W = robot.weight
+    gen = generalized_force(model, data, q, sj.js.geom.heel_offset, point_forces(parts["lam_impact"] * W * 0.1, robot.mu))
+    impact = (M[:6, :6] @ (v_plus - v_minus) - gen[:6])[SAGITTAL] / W
+    rows = jn.nlp.constraints(x)[family(jn, "touchdown")]
+    names = jn.row_names[family(jn, "touchdown")]
+    np.testing.assert_allclose(rows[names == "touchdown_position"], bm - bp, atol=1e-10)
+    np.testing.assert_allclose(rows[names == "impact"], impact, atol=1e-9)
+    assert np.abs(impact).max() > 1e-2  # a non-trivial impact
+
+
+def test_flight_rows_match_numeric_pinocchio_on_the_exported_flight(small_jump, small_export):
+    """At 1 kHz samples of the exported ballistic flight, the flight block's torque rows equal
+    numeric pinocchio.rnea of the exported (q, v, a) and its clearance rows the heights of the
+    heel, ball and toe points from forward kinematics (the block computes the motion about the
+    COM and moves the points by the COM's ballistic path); the exported flight is ballistic (no
+    base wrench), its base continuous at takeoff and off the landing's by the touchdown rows."""
+    sj, tr = small_jump, small_export
+    model, ph, robot = sj.js.model, sj.js.phases, sj.robot
+    data = model.createData()
+    parts = sj.nlp.variables.unpack(sj.x0)
+    block = sj.blocks["flight"]
+    rows = block.functions["rows"]
+    flight = np.where((tr["t"] > ph.takeoff) & (tr["t"] < ph.touchdown))[0]
+    assert len(flight) > 300
+    for i in flight[[0, 2, len(flight) // 3, len(flight) // 2, -3, -1]]:
+        t = tr["t"][i]
+        y, yd, ydd = (u[0] for u in joint_motion(sj.layer, sj.nlp.splines[0], tr["control_points"], t))
+        pitch = freeflyer_to_base(tr["q"][i][:7])[0, 2]
+        r = np.concatenate([[pitch], parts["L_to"], parts["c_to"], parts["cd_to"], [t - ph.takeoff]])
+        out = np.asarray(rows(y, yd, ydd, r)).ravel()
+        tau = pin.rnea(model, data, tr["q"][i], tr["v"][i], tr["a"][i])
+        assert np.abs(tau[:6]).max() < 1e-9 * robot.weight
+        np.testing.assert_allclose(out[block.layout["torque"]], tau[6:][robot.active],
+                                   atol=1e-8 * max(1.0, np.abs(tau).max()))
+        heights = foot_points(model, data, tr["q"][i], sj.js.geom.heel_offset)[2]
+        np.testing.assert_allclose(out[block.layout["flight_clearance"]], heights, atol=1e-10)
+    # continuous at takeoff; at touchdown the start's landing base is off the flight's by the
+    # touchdown rows (it is not a solution)
+    base = freeflyer_to_base(tr["q"][:, :7])
+    i = int(np.searchsorted(tr["t"], ph.takeoff))
+    assert np.max(np.abs(base[i + 1] - base[i - 1])) < 1e-2
+    i = int(np.searchsorted(tr["t"], ph.touchdown))
+    td = sj.nlp.nlp.constraints(sj.x0)[family(sj.nlp, "touchdown")][:3]
+    assert np.max(np.abs(td)) > 0.05
+    np.testing.assert_allclose(base[i] - base[i - 1], -td, atol=1e-2)
+
+
+def test_right_torque_rows_left_out_are_mirror_copies_of_the_left(small_jump, small_export):
     """The NLP keeps the torque rows of the centre and left joints only: on the exported motion,
-    numeric pinocchio.rnea gives every right joint its left partner's torque times the mirror
-    factor, and the training limits are mirror images, so the right rows would repeat the left.
-    Limits that are not mirror images keep every row."""
-    import dataclasses
-
-    js = jump_setup
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(consistent_start(nlp, nlp.x0)))}
-    tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
-    mass = sum(i.mass for i in js.model.inertias)
-    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass)
+    numeric pinocchio.rnea (and the exported torques with the contact forces) give every right
+    joint its left partner's torque times the mirror factor, and the training limits are mirror
+    images, so the right rows would repeat the left. Limits that are not mirror images keep every
+    row."""
+    sj, tr = small_jump, small_export
+    js, robot, jn = sj.js, sj.robot, sj.nlp
     pairs = [(r - 7, int(js.smap.learned_q[y]) - 7, f) for r, y, f in js.smap.copied]
     right = {r for r, _, _ in pairs}
-    assert len(pairs) == 19 and sorted(set(rm.active[rm.unmirrored]) & right) == []
-    assert len(rm.unmirrored) == len(rm.active) - len(right & set(rm.active))
-    names = np.array(nlp.names)
-    n_nodes = len(nlp.meta["grid"]["stance"]) + len(nlp.meta["grid"]["flight"]) + len(nlp.meta["grid"]["land"])
-    assert (names == "torque").sum() == n_nodes * len(rm.unmirrored)
+    assert len(pairs) == 19 and sorted(set(robot.active[robot.unmirrored]) & right) == []
+    assert len(robot.unmirrored) == len(robot.active) - len(right & set(robot.active))
+    n_nodes = sum(len(jn.grid[k]) for k in ("stance", "flight", "land"))
+    assert (jn.row_names == "torque").sum() == n_nodes * len(robot.unmirrored)
     d = js.model.createData()
+    checked = 0
     for i in range(0, len(tr["t"]), 97):
         tau = pin.rnea(js.model, d, tr["q"][i], tr["v"][i], tr["a"][i])[6:]
         for r, left, f in pairs:
             assert abs(tau[r] - f * tau[left]) <= 1e-9 * max(1.0, np.abs(tau).max())
+            assert abs(tr["tau"][i][r] - f * tr["tau"][i][left]) <= 1e-9 * max(1.0, np.abs(tr["tau"][i]).max())
+        checked += bool(tr["contact"][i])
+    assert checked > 5
     lo, hi = js.limits.tau_min, js.limits.tau_max
     for r, left, f in pairs:
         assert np.allclose((lo[r], hi[r]), (lo[left], hi[left]) if f > 0 else (-hi[left], -lo[left]))
-    skewed = dataclasses.replace(js.limits, tau_max=hi + np.eye(len(hi))[pairs[0][0]])
-    rm2 = RowModel(js.sym, js.smap, js.gpdm, js.geom, skewed, s.mu, mass)
-    assert np.array_equal(rm2.unmirrored, np.arange(len(rm2.active)))
-
-
-def _spline_base_nlp(js, **kw):
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, jit=False, base_model="spline", **kw)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    x = consistent_start(nlp, nlp.x0)
-    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(x))}
-    return s, nlp, parts, trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
-
-
-def test_spline_base_contact_rows_match_numeric_pinocchio(jump_setup):
-    """base_model="spline": at stance and landing nodes the contact rows equal numeric
-    pinocchio.rnea minus the point forces' J^T f (body weights) on the exported motion, the joint
-    torques, and the toe tip's offset from its ground point and the heel height from forward
-    kinematics; the exported base is the spline base."""
-    from latentoc.jump.base import base_to_freeflyer
-    from latentoc.jump.contact import joint_embedding, point_forces, point_jacobians
-
-    js = jump_setup
-    s, nlp, parts, tr = _spline_base_nlp(js)
-    mass = sum(i.mass for i in js.model.inertias)
-    W = mass * G
-    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")
-    block, layout = node_rows(rm, jit=False)["contact_rows"]
-    sp, sps, spl = nlp.meta["splines"]
-    grid, ph, d = nlp.meta["grid"], js.phases, js.model.createData()
-    node_t = np.concatenate([grid["stance"], grid["land"]])
-    xL = float(parts["x_L"].ravel()[0])
-    for j in (1, 3, len(grid["stance"]) + 2, len(node_t) - 2):
-        t = node_t[j]
-        land = t >= ph.touchdown
-        i = int(np.argmin(np.abs(tr["t"] - t)))
-        phs, off, coef = (spl, ph.touchdown, parts["phi_l"]) if land else (sps, 0.0, parts["phi_s"])
-        X = [sp.evaluate(parts["P"], np.array([t]), k)[0] for k in range(3)]
-        B = [phs.evaluate(coef, np.array([t - off]), k)[0] for k in range(3)]
-        lam = np.asarray(parts["lam"])[:, j]
-        r = np.array(block.rows(np.concatenate([*X, *B, [xL if land else 0.0], lam]))).ravel()
-        # the motion at this instant, numerically
-        q7, v6, a6 = base_to_freeflyer(*B)
-        gp_y = np.array(js.gpdm.mean_function()(X[0])).ravel()
-        E = joint_embedding(js.smap)
-        q = np.concatenate([q7[0], E @ gp_y])
-        np.testing.assert_allclose(q7[0], tr["q"][i][:7], atol=5e-3)  # the exporter's base at the nearest ms
-        # v, a of the joints by finite differences of the GP mean along the spline
-        h = 1e-5
-        ys = [np.array(js.gpdm.mean_function()(sp.evaluate(parts["P"], np.array([t + e]), 0)[0])).ravel()
-              for e in (-h, 0.0, h)]
-        v = np.concatenate([v6[0], E @ (ys[2] - ys[0]) / (2 * h)])
-        a = np.concatenate([a6[0], E @ (ys[2] - 2 * ys[1] + ys[0]) / h ** 2])
-        tau = pin.rnea(js.model, d, q, v, a)
-        Jp = point_jacobians(js.model, d, q, js.geom)
-        f = np.array(point_forces(lam * W, s.mu))
-        gen = sum(Jp[k].T @ np.array([f[k, 0], 0.0, f[k, 1]]) for k in range(3))
-        np.testing.assert_allclose(r[layout["dynamics"]], (tau - gen)[[0, 2, 4]] / W, atol=2e-3)
-        np.testing.assert_allclose(r[layout["torque"]], (tau - gen)[6:][rm.active], atol=0.5)
-        heel, ball, toe = foot_points(js.model, d, js.geom).T
-        np.testing.assert_allclose(r[layout["toe_position"]], [toe[0] - (xL if land else 0.0), toe[2]], atol=1e-9)
-        np.testing.assert_allclose(r[layout["heel_height"]], [heel[2]], atol=1e-9)
-        np.testing.assert_allclose(r[layout["ball_height"]], [ball[2]], atol=1e-9)
-        # the projected COM against the polygon of both feet (heel_R, toe_R, toe_L, heel_L)
-        A, b = polygon_from_vertices([[heel[0], -heel[1]], [toe[0], -toe[1]], toe[:2], heel[:2]])
-        com = pin.centerOfMass(js.model, d, q)
-        np.testing.assert_allclose(r[layout["com_polygon"]], A @ com[:2] + b, atol=1e-9)
-
-
-def test_spline_base_takeoff_and_touchdown_rows_match_numeric_momentum(jump_setup):
-    """base_model="spline": the takeoff rows are the stance state's COM, COM velocity and
-    angular momentum about the COM (pinocchio.computeCentroidalMomentum) minus the flight's
-    takeoff variables; the exported flight starts from that state (continuous base)."""
-    from latentoc.jump.base import base_to_freeflyer
-    from latentoc.jump.contact import joint_embedding
-
-    js = jump_setup
-    s, nlp, parts, tr = _spline_base_nlp(js)
-    mass = sum(i.mass for i in js.model.inertias)
-    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")
-    block, layout = node_rows(rm, jit=False)["takeoff_rows"]
-    sp, sps, _ = nlp.meta["splines"]
-    t = np.array([js.phases.takeoff])
-    X = [sp.evaluate(parts["P"], t, k)[0] for k in range(3)]
-    B = [sps.evaluate(parts["phi_s"], t, k)[0] for k in range(3)]
-    c_to, cd_to, L_to = (np.asarray(parts[k], float).ravel() for k in ("c_to", "cd_to", "L_to"))
-    p0 = float(np.asarray(parts["pitch_flight"]).ravel()[0])
-    r = np.array(block.rows(np.concatenate([*X, *B, c_to, cd_to, L_to, [p0]]))).ravel()
-    E = joint_embedding(js.smap)
-    h = 1e-6
-    y = [np.array(js.gpdm.mean_function()(sp.evaluate(parts["P"], t + e, 0)[0])).ravel() for e in (-h, 0.0, h)]
-    q7, v6, _ = base_to_freeflyer(B[0], B[1])
-    q = np.concatenate([q7[0], E @ y[1]])
-    v = np.concatenate([v6[0], E @ (y[2] - y[0]) / (2 * h)])
-    d = js.model.createData()
-    hg = pin.computeCentroidalMomentum(js.model, d, q, v)
-    c = d.com[0]
-    expected = np.concatenate([c[[0, 2]] - c_to, hg.linear[[0, 2]] / mass - cd_to, [hg.angular[1] - L_to[0]],
-                               [B[0][2] - p0]])
-    np.testing.assert_allclose(r, expected, atol=1e-6)
-    # the flight variables of the start are this state, and the exported base is continuous
-    np.testing.assert_allclose(r, 0.0, atol=1e-8)
-    i = int(np.searchsorted(tr["t"], js.phases.takeoff))
-    assert np.max(np.abs(tr["q"][i + 1][:3] - tr["q"][i][:3])) < 5e-3
-
-
-def test_flight_rows_match_numeric_pinocchio_on_the_exported_flight(jump_setup):
-    """At 1 kHz samples of the exported ballistic flight, the flight block's torque rows equal
-    numeric pinocchio.rnea of the exported (q, v, a) and its clearance rows the heights of the
-    heel, ball and toe points from forward kinematics (the block computes the motion about the
-    COM and moves the points by the COM's ballistic path)."""
-    from latentoc.jump.base import freeflyer_to_base
-
-    js = jump_setup
-    s, nlp, parts, tr = _spline_base_nlp(js)
-    mass = sum(i.mass for i in js.model.inertias)
-    rm = RowModel(js.sym, js.smap, js.gpdm, js.geom, js.limits, s.mu, mass, "spline")
-    block, layout = node_rows(rm, jit=False)["flight_rows"]
-    sp = nlp.meta["splines"][0]
-    ph, d = js.phases, js.model.createData()
-    c_to, cd_to, L_to = (np.asarray(parts[k], float).ravel() for k in ("c_to", "cd_to", "L_to"))
-    flight = np.where((tr["t"] > ph.takeoff) & (tr["t"] < ph.touchdown))[0]
-    for i in flight[[2, len(flight) // 3, len(flight) // 2, -3]]:
-        t = tr["t"][i]
-        X = [sp.evaluate(parts["P"], np.array([t]), k)[0] for k in range(3)]
-        pitch = freeflyer_to_base(tr["q"][i][:7])[0, 2]
-        u = np.concatenate([*X, [pitch], L_to, c_to, cd_to, [t - ph.takeoff]])
-        r = np.array(block.rows(u)).ravel()
-        tau = pin.rnea(js.model, d, tr["q"][i], tr["v"][i], tr["a"][i])
-        np.testing.assert_allclose(r[layout["torque"]], tau[6:][rm.active], atol=1e-6 * max(1.0, np.abs(tau).max()))
-        pin.framesForwardKinematics(js.model, d, tr["q"][i])
-        np.testing.assert_allclose(r[layout["flight_clearance"]], foot_points(js.model, d, js.geom)[2], atol=1e-9)
+    skewed = dataclasses.replace(robot, limits=dataclasses.replace(js.limits, tau_max=hi + np.eye(len(hi))[pairs[0][0]]))
+    assert np.array_equal(skewed.unmirrored, np.arange(len(skewed.active)))

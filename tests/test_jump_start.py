@@ -1,127 +1,86 @@
-"""The phase-1 start: training guess made consistent with the NLP's linear equalities."""
+"""The training start (latentoc.jump.start.initial_point, balanced_forces) and the smoothed
+initial latent path (latentoc.jump.problem.initial_latent_path)."""
 import numpy as np
-import pytest
+import pinocchio as pin
 
-from latentoc.jump.problem import consistent_start, initial_guess
-from latentoc.jump.transcription import JumpSettings, build_nlp
-
-
-def test_consistent_start_fits_nonnegative_forces(jump_setup):
-    js = jump_setup
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    names = np.array(nlp.names)
-    x = consistent_start(nlp, nlp.x0)
-    g0, g1 = (np.array(nlp.meta["g_fun"](v)).ravel() for v in (nlp.x0, x))
-    a, b = nlp.meta["sizes"]["lam"]
-    assert np.all(x[a:b] >= 0)
-    # contact schedule: the heel is unloaded at the stance's last node (after heel-off) and the
-    # landing's first (before heel strike); those generators are bounded to zero and stay zero
-    tc = np.concatenate([nlp.meta["grid"]["stance"], nlp.meta["grid"]["land"]])
-    ub = nlp.ubx[a:b].reshape(-1, 6)
-    assert np.array_equal(ub[:, 0] == 0, ~js.phases.loaded("heel", tc)) and (ub[:, 0] == 0).sum() >= 2
-    assert np.array_equal(ub[:, 2] == 0, ~js.phases.loaded("ball", tc)) and np.all(ub[:, 4] > 0)
-    assert np.all(x[a:b][nlp.ubx[a:b] == 0] == 0)
-    # the base-row residual of every contact node is no worse than with the uniform guess
-    d0, d1 = (np.abs(g[names == "dynamics"]).reshape(-1, 3) for g in (g0, g1))
-    assert d0.shape[0] == len(nlp.meta["grid"]["stance"]) + 6 >= 5 + 6
-    assert np.all(np.linalg.norm(d1, axis=1) <= np.linalg.norm(d0, axis=1) + 1e-9)
-    assert np.linalg.norm(d1) < np.linalg.norm(d0)
+from jump_reference import SAGITTAL, full_state, generalized_force, joint_motion, point_forces
+from latentoc.jump.start import balanced_forces
 
 
-def test_foot_pitch_fit_gives_a_consistent_takeoff_velocity(jump_setup):
-    """The refitted phi_s gives the toe-pinned start the captured takeoff velocity (x, z, pitch)."""
-    from latentoc.jump.transcription import anchored_function
-    from latentoc.spline import BSpline
-
-    js = jump_setup
-    s = JumpSettings(base_model="pinned")
-    ph = js.phases
-    anch = anchored_function(js.sym, js.smap, js.gpdm, js.geom)
-    tt = np.array([ph.takeoff])
-
-    def takeoff_velocity(ig):
-        X = [BSpline(s.n_control, ph.duration).evaluate(ig["P"], tt, k) for k in range(3)]
-        f = [BSpline(s.n_phi_stance, ph.takeoff).evaluate(ig["phi_s"][:, None], tt, k)[:, 0][None] for k in range(3)]
-        return np.array(anch(X[0].T, X[1].T, X[2].T, *f, 0.0)[1]).ravel()
-
-    tr = js.training
-    captured = np.gradient(tr.base, tr.t, axis=0)[int(np.argmin(np.abs(tr.t - ph.takeoff)))]
-    raw, fitted = takeoff_velocity(initial_guess(js, s, fit_base=False)), takeoff_velocity(initial_guess(js, s))
-    assert np.linalg.norm(raw - captured) > 1.0
-    assert np.all(np.abs(fitted - captured) < [0.1, 0.15, 0.1])
+def _node_base_rows(sj, parts, t):
+    """The sagittal base rows at contact time t as c - A lam (body weights): c from numeric
+    rnea, A the generalized force of a unit weight on each pyramid edge."""
+    js, robot, jn = sj.js, sj.robot, sj.nlp
+    model = js.model
+    data = model.createData()
+    _, sps, spl = jn.splines
+    if t >= js.phases.touchdown - 1e-12:
+        b = [spl.evaluate(parts["base_land"], np.array([t - js.phases.touchdown]), k)[0] for k in range(3)]
+    else:
+        b = [sps.evaluate(parts["base_stance"], np.array([t]), k)[0] for k in range(3)]
+    y, yd, ydd = (u[0] for u in joint_motion(sj.layer, jn.splines[0], jn.control_points(sj.x0), t))
+    q, v, a = full_state(js.smap, *b, y, yd, ydd)
+    W = robot.weight
+    c = pin.rnea(model, data, q, v, a)[SAGITTAL] / W
+    A = np.column_stack([generalized_force(model, data, q, js.geom.heel_offset, point_forces(e, robot.mu))[SAGITTAL]
+                         for e in np.eye(6)])
+    return c, A
 
 
-@pytest.mark.parametrize("base_model", ["spline", "pinned"])
-def test_lifted_jacobian_matches_finite_differences(base_model, jump_setup):
-    """The NLP's jac_g (compiled node Jacobians chained through the affine node inputs) against
-    central differences of its constraint rows along random directions, for both base models."""
-    js = jump_setup
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, base_model=base_model)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    rng = np.random.default_rng(0)
-    x = nlp.x0 + 1e-3 * rng.standard_normal(nlp.x0.size)
-    J = np.array(nlp.meta["jac_fun"](x, 1.0)[1])
-    g = nlp.meta["g_fun"]
-    for _ in range(3):
-        dv = rng.standard_normal(x.size)
-        h = 1e-6
-        fd = (np.array(g(x + h * dv)).ravel() - np.array(g(x - h * dv)).ravel()) / (2 * h)
-        an = J @ dv
-        assert np.max(np.abs(fd - an)) <= 1e-6 * np.max(np.abs(an))
+def test_initial_point_fits_the_training_motion(small_jump):
+    """The start's latent control points and landing point are the set-up's; its contact phases'
+    base splines are least-squares fits of the captured base (normal equations); the variables
+    are within their bounds; the touchdown impulse is the uniform guess on the loaded points."""
+    sj = small_jump
+    js, jn, ph = sj.js, sj.nlp, sj.js.phases
+    parts = jn.variables.unpack(sj.x0)
+    np.testing.assert_array_equal(jn.control_points(sj.x0), js.init["P"])
+    assert parts["x_L"][0] == js.init["x_L"]
+    assert np.all(sj.x0 >= jn.lbx) and np.all(sj.x0 <= jn.ubx)
+    t, base = js.init["t"], js.init["base"]
+    _, sps, spl = jn.splines
+    for coef, spline, sel, t0 in ((parts["base_stance"], sps, t <= ph.takeoff + 1e-9, 0.0),
+                                  (parts["base_land"], spl, t >= ph.touchdown - 1e-9, ph.touchdown)):
+        B = spline.basis(t[sel] - t0)
+        resid = B @ coef - base[sel]
+        np.testing.assert_allclose(B.T @ resid, 0.0, atol=1e-9)
+        assert np.abs(resid).max() < 0.05  # m, rad: the captured base, smoothed
+    at_touchdown = [ph.loaded(p, np.array([ph.touchdown]))[0] for p in ("heel", "ball", "toe")]
+    assert at_touchdown == [False, False, True]  # the landing is toe-first
+    np.testing.assert_array_equal(parts["lam_impact"], 0.5 * np.repeat(at_touchdown, 2))
 
 
-@pytest.mark.parametrize("time_scale", [True, False])
-def test_exact_hessian_matches_finite_differences(time_scale, jump_setup):
-    """hessian="exact": the Hessian of the Lagrangian (compiled node Hessians chained through the
-    node inputs, with the time scale's curvature and the pitch integral's product rule) against
-    central differences of the Lagrangian's gradient, lam_f grad f + jac_g^T lam_g."""
-    import casadi as ca
-
-    js = jump_setup
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6, hessian="exact", wrench_spacing=0.02,
-                     time_scale=time_scale)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    rng = np.random.default_rng(1)
-    x = nlp.x0 + 1e-3 * rng.standard_normal(nlp.x0.size)
-    lam_f, lam_g = 0.7, rng.standard_normal(len(nlp.names))
-    Hu = np.array(ca.densify(nlp.meta["hess_fun"](x, 1.0, lam_f, lam_g)))
-    assert np.allclose(np.tril(Hu, -1), 0)
-    H = Hu + Hu.T - np.diag(np.diag(Hu))
-    w = ca.MX.sym("w", x.size)
-    grad_f = ca.Function("grad_f", [w], [ca.gradient(nlp.meta["f_fun"](w, 1.0), w)])
-
-    def grad_lagrangian(v):
-        return lam_f * np.array(grad_f(v)).ravel() + np.array(nlp.meta["jac_fun"](v, 1.0)[1]).T @ lam_g
-
-    for _ in range(3):
-        dv = rng.standard_normal(x.size)
-        h = 1e-6
-        fd = (grad_lagrangian(x + h * dv) - grad_lagrangian(x - h * dv)) / (2 * h)
-        assert np.max(np.abs(fd - H @ dv)) <= 1e-6 * np.max(np.abs(fd))
-
-
-def test_time_scaled_export_is_differentiable_in_real_time(jump_setup):
-    """With time scale k the exported motion lasts k T, and its v and a are the real-time
-    derivatives of q (central differences with pinocchio.difference on the 1 kHz grid)."""
-    import pinocchio as pin
-
-    from latentoc.jump.problem import trajectory
-
-    js = jump_setup
-    s = JumpSettings(tube=0.02, n_stance=5, n_flight=5, n_land=6)
-    nlp = build_nlp(js.model, js.smap, js.gpdm, js.geom, js.phases, js.limits, s, initial_guess(js, s), js.sym)
-    x = consistent_start(nlp, nlp.x0)
-    x[slice(*nlp.meta["sizes"]["time_scale"])] = 1.1
-    parts = {k: np.array(v) for k, v in zip(nlp.unpack.name_out(), nlp.unpack(x))}
-    tr = trajectory(js, {"settings": s, "parts": parts, "nlp": nlp})
-    t, Q, V, A = tr["t"], tr["q"], tr["v"], tr["a"]
-    assert np.isclose(t[-1], 1.1 * js.phases.duration) and np.isclose(tr["takeoff"], 1.1 * js.phases.takeoff)
-    h = t[1] - t[0]
-    for i in (100, 500, 1000, 1300):  # stance, flight, landing
-        vd = pin.difference(js.model, Q[i - 1], Q[i + 1]) / (2 * h)
-        assert np.allclose(vd, V[i], atol=2e-3 * max(1.0, np.abs(V[i]).max()))
-        assert np.allclose((V[i + 1] - V[i - 1]) / (2 * h), A[i], atol=2e-2 * max(1.0, np.abs(A[i]).max()))
+def test_balanced_forces_fit_the_base_rows_with_nonnegative_loaded_edges(small_jump):
+    """The start's edge weights are >= 0, zero on the edges the contact schedule unloads (bounded
+    to zero: the heel after heel-off, before heel strike), and at every contact node the
+    non-negative least-squares fit of the sagittal base rows of numeric rnea over the loaded edges
+    (KKT conditions with the edge forces from numeric Pinocchio); no node's residual is worse than
+    with the uniform guess. Refitting from other weights changes only the weights, back to these."""
+    sj = small_jump
+    jn, ph = sj.nlp, sj.js.phases
+    parts = jn.variables.unpack(sj.x0)
+    lam = parts["lam"]
+    tc = np.concatenate([jn.grid["stance"], jn.grid["land"]])
+    ub = jn.ubx[jn.variables.index("lam")]
+    loaded = np.repeat(np.column_stack([ph.loaded(p, tc) for p in ("heel", "ball", "toe")]), 2, axis=1)
+    np.testing.assert_array_equal(ub > 0, loaded)
+    assert (~loaded[:, 0]).sum() >= 2 and loaded[:, 4].all()
+    assert np.all(lam >= 0) and np.all(lam[~loaded] == 0)
+    for k, t in enumerate(tc):
+        c, A = _node_base_rows(sj, parts, t)
+        grad = A.T @ (A @ lam[k] - c)
+        tol = 1e-8 * max(1.0, np.abs(A).max() * np.abs(c).max())
+        assert np.all(grad[loaded[k]] >= -tol), (k, grad)
+        assert np.all(np.abs(grad[loaded[k] & (lam[k] > 1e-9)]) <= tol), (k, grad)
+        uniform = np.where(loaded[k], 1.0 / 12.0, 0.0)
+        assert np.linalg.norm(c - A @ lam[k]) <= np.linalg.norm(c - A @ uniform) + 1e-12
+    # the NLP's dynamics rows at the start are these residuals
+    dyn = jn.nlp.constraints(sj.x0)[jn.row_names == "dynamics"].reshape(-1, 3)
+    assert dyn.shape == (len(tc), 3) and np.linalg.norm(dyn) > 0
+    x = np.array(sj.x0)
+    x[jn.variables.index("lam")] = np.random.default_rng(2).uniform(0.0, 1.0, lam.shape)
+    refit = balanced_forces(jn, x)
+    np.testing.assert_allclose(refit, sj.x0, atol=1e-9)
 
 
 def test_initial_latent_path_keeps_the_kept_state_and_smooths_the_rest():

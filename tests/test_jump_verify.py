@@ -76,12 +76,18 @@ def test_node_wrench_mismatch_against_the_needed_wrench():
 
 @pytest.mark.skipif(not os.environ.get("LATENTOC_SLOW"), reason="a jump solve takes minutes on 2 shared cores")
 def test_quick_solve_verifies():
+    """The packaged jump without torque limits and polygon rows at a wide tube: solved, and its
+    1 kHz export checked by numeric Pinocchio (base rows balanced, ballistic flight, symmetric)."""
+    import dataclasses
+
     from latentoc.problem import load_problem
     from latentoc.solve import solve
+
     p = load_problem("broad-jump")
-    p.options.update(torque_limits=False, polygon=False, contact_model="free")
+    p = dataclasses.replace(p, options={**p.options, "torque_limits": False, "polygon": False})
     r = solve(p, tube=0.2).result
     assert r["success"] and r["max_dynamics_residual"] < 0.2 and r["max_lateral_residual"] < 1e-6
+    assert r["max_flight_residual"] < 1e-8 and r["distance"] > r["distance_initial"]
 
 
 def test_point_forces_on_their_bodies_balance_a_static_stance():
