@@ -33,14 +33,14 @@ from ..gpdm import GPDM
 from ..latent import GPLayer, IdentityLayer
 from ..nlp.assemble import Family, SparseNLP
 from ..nlp.blocks import RobotBlock, block_inputs
-from ..nlp.evaluators import BlockEvaluator, VarianceEvaluator
+from ..nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
 from ..nlp.inputs import NodeInputs
 from ..problem import Problem
 from ..spline import BSpline
 from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
 
 __all__ = ["METHODS", "MinTorqueSettings", "MinTorqueNLP", "latent_nlp", "joint_range_nlp", "torque_block",
-           "joint_position_block", "torque_limit_vector", "ipopt_options", "sampled_motion"]
+           "torque_limit_vector", "ipopt_options", "sampled_motion"]
 
 METHODS = ("latent", "joint-range")
 
@@ -124,12 +124,6 @@ def torque_block(model: SymbolicModel, latent_dim: int, with_torques: bool = Fal
     return RobotBlock.from_parts(name, (y, yd, ydd, r), parts, latent_dim)
 
 
-def joint_position_block(D: int, latent_dim: int) -> RobotBlock:
-    """The block q = y (the joint-limit rows)."""
-    y, yd, ydd, r = block_inputs(D, 0)
-    return RobotBlock.from_parts("joint_position", (y, yd, ydd, r), {"q": y}, latent_dim)
-
-
 def _spline_inputs(path: SplinePath, t: np.ndarray, orders: int) -> tuple[sp.csr_matrix, np.ndarray]:
     """(S, s0) of the path's value and first ``orders`` - 1 derivatives at times t (Eq. 23-25)."""
     ni = NodeInputs(len(t), path.n_w)
@@ -156,14 +150,13 @@ def _torque_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: S
 
 
 def _joint_limit_family(layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray) -> Family:
-    """Rows y(t_j) (node-major): through the joint-position block, or, when the path is the
-    joint path itself (identity layer), linear in w: y = B0 P."""
+    """Rows y(t_j) (node-major): the GP mean of the latent points, or, when the path is the joint
+    path itself (identity layer), linear in w: y = B0 P."""
     if isinstance(layer, IdentityLayer):
         S, s0 = _spline_inputs(path, t, 1)  # no node evaluator: the rows are L w + c
         return Family("joint_limits", None, sp.csr_matrix((0, path.n_w)), np.zeros(0), L=S, c=s0)
-    S, s0 = _spline_inputs(path, t, 3)
-    block = BlockEvaluator(joint_position_block(layer.output_dim, layer.latent_dim), layer)
-    return Family("joint_limits", block, S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
+    S, s0 = _spline_inputs(path, t, 1)
+    return Family("joint_limits", MeanEvaluator(layer), S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
 
 
 def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, settings: MinTorqueSettings,

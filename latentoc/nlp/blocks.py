@@ -35,7 +35,7 @@ from . import jit
 __all__ = ["RobotBlock", "block_inputs", "compile_blocks"]
 
 # bump when the derivative Functions made from the same rows change: the cache index keys on it
-BLOCK_VERSION = "1"
+BLOCK_VERSION = "2"
 PIECES = ("rows", "jac", "hess")
 
 
@@ -53,6 +53,7 @@ class RobotBlock:
     latent_dim: int
     layout: dict[str, slice] = field(default_factory=dict)  # named row ranges of F
     functions: dict[str, ca.Function] = field(default_factory=dict, repr=False)
+    instructions: dict[str, int] = field(default_factory=dict, repr=False)  # of the compiled pieces
     _maps: dict = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -117,7 +118,7 @@ class RobotBlock:
     def mapped(self, which: str, K: int) -> ca.Function:
         key = (which, K)
         if key not in self._maps:
-            self._maps[key] = jit.node_map(self.function(which), K)
+            self._maps[key] = jit.node_map(self.function(which), K, self.instructions.get(which, 0))
         return self._maps[key]
 
 
@@ -142,9 +143,11 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
         if b.functions or not jit.enabled():  # without JIT the SX pieces are built when first used
             continue
         try:
-            libs = json.loads(_index_file(b).read_text())["libraries"]
+            entry = json.loads(_index_file(b).read_text())
+            libs = entry["libraries"]
             if len(libs) == 3 and all(Path(p).exists() for p in libs):
                 b.functions = _load(b, libs)
+                b.instructions = dict(entry.get("instructions", {}))
                 continue
         except (OSError, ValueError, KeyError, TypeError):
             pass
@@ -167,7 +170,9 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
             continue
         index = _index_file(b)
         tmp = index.with_name(f".{index.name}.{os.getpid()}")
-        tmp.write_text(json.dumps({"block": b.name, "libraries": [str(p) for p in libs]}))
+        b.instructions = {k: f.n_instructions() for k, f in fns[b.name].items()}
+        tmp.write_text(json.dumps({"block": b.name, "libraries": [str(p) for p in libs],
+                                   "instructions": b.instructions}))
         os.replace(tmp, index)
         b.functions = _load(b, [str(p) for p in libs])
     return blocks

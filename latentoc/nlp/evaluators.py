@@ -19,7 +19,7 @@ import numpy as np
 from ..latent.gp_layer import GPLayer, IdentityLayer, LatentMotion
 from .blocks import RobotBlock, compile_blocks, stack_tangents
 
-__all__ = ["BlockEvaluator", "VarianceEvaluator"]
+__all__ = ["BlockEvaluator", "MeanEvaluator", "VarianceEvaluator"]
 
 
 def _dm(x) -> np.ndarray:
@@ -69,6 +69,30 @@ class BlockEvaluator:
         nz = 3 * self.layer.latent_dim
         H[:, :nz, :nz] += self.layer.curvature(s[:, :nz], _dm(mu).T)
         return H
+
+
+class MeanEvaluator:
+    """The GP mean y = mu_Q(x) (Eq. 18) at K latent points, for rows on the pose alone (joint
+    limits); local inputs s = x."""
+
+    def __init__(self, layer: GPLayer):
+        self.layer = layer
+        self.n_in, self.n_out = layer.latent_dim, layer.output_dim
+
+    def _Z(self, s: np.ndarray) -> np.ndarray:
+        return np.hstack([s, np.zeros((s.shape[0], 2 * s.shape[1]))])
+
+    def values(self, s: np.ndarray) -> np.ndarray:
+        return self.layer.motion(self._Z(s)).y
+
+    def jacobian(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        m = self.layer.motion(self._Z(s))
+        return m.y, m.G0
+
+    def hessian(self, s: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        mu = np.hstack([np.asarray(lam, float), np.zeros((s.shape[0], 2 * self.n_out))])
+        d = self.n_in
+        return self.layer.curvature(self._Z(s), mu)[:, :d, :d]
 
 
 class VarianceEvaluator:

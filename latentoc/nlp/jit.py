@@ -64,11 +64,14 @@ def threads() -> int:
     return int(n)
 
 
-def node_map(f: ca.Function, K: int) -> ca.Function:
+THREADED_WORK = 2_000_000  # instructions per mapped call below which threads cost more than they share
+
+
+def node_map(f: ca.Function, K: int, instructions: int = 0) -> ca.Function:
     """``f`` mapped over K nodes, on :func:`threads` threads when f is compiled (in CasADi's
-    virtual machine threads are slower)."""
+    virtual machine threads are slower) and the call does enough work (``instructions`` per node)."""
     n = threads()
-    if K > 1 and n > 1 and f.class_name() == "External":
+    if K > 1 and n > 1 and f.class_name() == "External" and K * instructions >= THREADED_WORK:
         return f.map(K, "thread", min(n, K))
     return f.map(K)
 
