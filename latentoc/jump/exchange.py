@@ -16,21 +16,22 @@ from .phases import Phases
 
 __all__ = ["candidates", "binding_times", "EXCHANGED", "NEIGHBOURS"]
 
-EXCHANGED = {"wrench": "wrench", "flight_torque": "flight_torque"}  # Samples field -> family name
+EXCHANGED = {"wrench": "wrench", "flight_torque": "flight_torque", "tube": "tube"}  # Samples field -> family
 NEIGHBOURS = (-0.002, 0.002)  # s: added with each violated stretch's worst time
 
 
 def candidates(phases: Phases, rate_hz: float = 1000.0) -> Samples:
-    """The 1 kHz grid's times in contact (wrench rows) and in flight (torque rows)."""
+    """The 1 kHz grid's times in contact (wrench rows), in flight (torque rows) and inside (tube)."""
     t = np.linspace(0.0, phases.duration, int(round(phases.duration * rate_hz)) + 1)
     contact = (t < phases.takeoff) | (t > phases.touchdown)
     flight = (t >= phases.takeoff) & (t <= phases.touchdown)
-    return Samples(t[contact & (t > 0) & (t < phases.duration)], t[flight])
+    inside = (t > 0) & (t < phases.duration)
+    return Samples(t[contact & inside], t[flight], t[inside])
 
 
-def binding_times(probe: JumpNLP, w: np.ndarray, tol: float) -> tuple[Samples, dict[str, float]]:
+def binding_times(probe: JumpNLP, w: np.ndarray, tol: dict[str, float]) -> tuple[Samples, dict[str, float]]:
     """Where the sampled rows, evaluated at ``w`` in ``probe`` (an NLP whose samples are the
-    :func:`candidates`), are violated by more than ``tol``: each violated stretch of the 1 kHz
+    :func:`candidates`), are violated by more than ``tol[family]``: each violated stretch of the 1 kHz
     grid gives its worst time, a local minimum of the slack. Also the largest violation of each
     exchanged family (in the rows' units: body weights, torque limit ranges)."""
     g = probe.nlp.constraints(w)
@@ -49,7 +50,7 @@ def binding_times(probe: JumpNLP, w: np.ndarray, tol: float) -> tuple[Samples, d
         worst[fam] = float(max(0.0, -per_time.min(initial=np.inf)))
         left = np.concatenate([[np.inf], per_time[:-1]])
         right = np.concatenate([per_time[1:], [np.inf]])
-        worst_t = tt[(per_time < -tol) & (per_time <= left) & (per_time <= right)]
+        worst_t = tt[(per_time < -tol[fam]) & (per_time <= left) & (per_time <= right)]
         near = np.concatenate([worst_t] + [worst_t + dt for dt in NEIGHBOURS])
         out[field] = np.unique(tt[np.isin(np.round(tt, 6), np.round(near, 6))])
-    return Samples(out["wrench"], out["flight_torque"]), worst
+    return Samples(out["wrench"], out["flight_torque"], out["tube"]), worst

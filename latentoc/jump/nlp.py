@@ -86,14 +86,22 @@ def merge_samples(samples: np.ndarray, extra: np.ndarray, nodes: np.ndarray, gap
 
 @dataclass
 class Samples:
-    """Times of the rows that are not tied to variables: the wrench samples in contact and the
-    flight's torque rows (the exchange of :mod:`.exchange` adds to them)."""
+    """Times of the rows that are not tied to variables: the wrench samples in contact, the
+    flight's torque rows and the tube (the exchange of :mod:`.exchange` adds to them)."""
 
     wrench: np.ndarray
     flight_torque: np.ndarray
+    tube: np.ndarray
 
     def merged(self, other: "Samples") -> "Samples":
-        return Samples(np.union1d(self.wrench, other.wrench), np.union1d(self.flight_torque, other.flight_torque))
+        return Samples(*(np.union1d(a, b) for a, b in zip(self.fields(), other.fields())))
+
+    def minus(self, other: "Samples") -> "Samples":
+        """The times of self not (to 1 us) in other."""
+        return Samples(*(a[~np.isin(np.round(a, 6), np.round(b, 6))] for a, b in zip(self.fields(), other.fields())))
+
+    def fields(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.wrench, self.flight_torque, self.tube
 
 
 def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
@@ -106,7 +114,7 @@ def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
 def default_samples(settings: JumpSettings, phases: Phases) -> Samples:
     """Wrench samples every ``wrench_spacing`` between the contact nodes, just inside each unloaded
     interval of the contact schedule and at the splines' breakpoints (their accelerations kink
-    there); the flight's torque rows at the flight nodes."""
+    there); the flight's torque rows at the flight nodes; the tube every ``tube_spacing``."""
     s, ph = settings, phases
     grid = node_grid(s, ph)
     ts, tl, T = grid["stance"], grid["land"], ph.duration
@@ -120,7 +128,8 @@ def default_samples(settings: JumpSettings, phases: Phases) -> Samples:
         twl = merge_samples(between(tl, s.wrench_spacing),
                             np.concatenate([sw[sw > ph.touchdown], knots[(knots > ph.touchdown) & (knots < T)]]), tl)
         tw = np.concatenate([tws, twl])
-    return Samples(tw, grid["flight"].copy())
+    t_tube = np.linspace(0.0, T, max(2, int(round(T / s.tube_spacing)) + 1))[1:-1]  # the ends are fixed
+    return Samples(tw, grid["flight"].copy(), t_tube)
 
 
 class _Rows:
@@ -288,8 +297,8 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     rows.add(0, "impact")
     family("touchdown", ni, rows, t_td)
 
-    # tube on a dense grid (the end points are fixed on the training path)
-    t_tube = np.linspace(0.0, T, max(2, int(round(T / s.tube_spacing)) + 1))[1:-1]
+    # the tube (Eq. 29) at its sample times
+    t_tube = np.asarray(samples.tube, float)
     ni = NodeInputs(len(t_tube), n_w)
     ni.spline([sp_.basis(t_tube, 0)], var.latent_index(), P_fixed)
     S, s0 = ni.build()
