@@ -1,10 +1,10 @@
 """The broad jump's row families (latentoc.jump.rows) against numeric Pinocchio.
 
-Contact, wrench-sample, pitch-integration, takeoff and touchdown rows are read from the
-assembled NLP (so the node inputs are checked with the blocks) at the training start of a
-jump with few nodes: the joint motion of the GP layer along the training fit's latent path,
-the contact phases' base splines fitted to the captured base. Flight rows are checked on the
-1 kHz export of that start. References: ``pinocchio.rnea`` (with the point forces as external
+Every row family is read from the assembled NLP (so the node inputs are checked with the
+blocks) at the training start of a jump with few nodes: the joint motion of the GP layer along
+the training fit's latent path, the contact phases' base splines fitted to the captured base.
+The flight's torque rows are placed at times of the 1 kHz export of that start and checked on
+its exported motion. References: ``pinocchio.rnea`` (with the point forces as external
 forces), frame placements and Jacobians, the COM, the centroidal momentum and its rate, the
 mass matrix (:mod:`jump_reference`).
 """
@@ -18,7 +18,7 @@ from jump_reference import (SAGITTAL, flight_base, foot_points, full_state, gene
                             mass_of, momentum, pitch_rate_for, point_forces, polygon_rows)
 from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
 from latentoc.jump.contact import TOE_PAD
-from latentoc.jump.nlp import build_nlp
+from latentoc.jump.nlp import Samples, build_nlp, default_samples
 from latentoc.jump.zmp import G
 
 GRAVITY = np.array([0.0, -9.81])
@@ -136,7 +136,8 @@ def test_wrench_rows_are_the_cone_of_the_needed_wrench(small_jump):
     parts = jn.variables.unpack(sj.x0)
     sl = family(jn, "wrench")
     g, names = jn.nlp.constraints(sj.x0)[sl], jn.row_names[sl]
-    tw = jn.meta["wrench_times"]
+    tw = jn.meta["samples"].wrench
+    np.testing.assert_array_equal(np.unique(jn.meta["row_times"][sl]), tw)
     K = len(tw)
     ff = robot.force_free
     free_kept = np.intersect1d(ff, robot.unmirrored)
@@ -193,10 +194,14 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(small_j
     sj = small_jump
     jn, ph, robot = sj.nlp, sj.js.phases, sj.robot
     names = jn.row_names
-    n0 = build_nlp(robot, sj.layer, sj.blocks, ph, sj.settings, sj.js.init["P"], "feasibility", wrench_samples=False)
+    default = default_samples(sj.settings, ph)
+    np.testing.assert_array_equal(jn.meta["samples"].wrench, default.wrench)
+    np.testing.assert_array_equal(default.flight_torque, jn.grid["flight"])
+    n0 = build_nlp(robot, sj.layer, sj.blocks, ph, sj.settings, sj.js.init["P"], "feasibility",
+                   samples=Samples(np.zeros(0), default.flight_torque))
     assert not any(str(k).startswith(("wrench_", "cop_", "torque_free")) for k in n0.row_names)
     assert "wrench" not in n0.nlp.row_offset and n0.variables.n == jn.variables.n
-    tw, grid, spacing = jn.meta["wrench_times"], jn.grid, sj.settings.wrench_spacing
+    tw, grid, spacing = jn.meta["samples"].wrench, jn.grid, sj.settings.wrench_spacing
     n_samples = int((names == "wrench_normal").sum())
     nodes = np.concatenate([grid["stance"], grid["land"]])
     assert len(tw) == n_samples and np.all(np.diff(tw) > 0)
@@ -256,7 +261,7 @@ def test_pitch_rate_keeps_the_angular_momentum(small_jump):
     model, jn, ph, smap = sj.js.model, sj.nlp, sj.js.phases, sj.js.smap
     data = model.createData()
     P = jn.control_points(sj.x0)
-    block = sj.blocks["pitch_rate"].functions["rows"]
+    block = sj.blocks["pitch_rate"].function("rows")
     rng = np.random.default_rng(4)
     for t in np.linspace(0.05, 1.25, 5):
         y, yd, ydd = (u[0] for u in joint_motion(sj.layer, jn.splines[0], P, t))
@@ -307,32 +312,29 @@ def test_touchdown_rows_match_numeric_momentum_and_impact(small_jump):
     assert np.abs(impact).max() > 1e-2  # a non-trivial impact
 
 
-def test_flight_rows_match_numeric_pinocchio_on_the_exported_flight(small_jump, small_export):
-    """At 1 kHz samples of the exported ballistic flight, the flight block's torque rows equal
-    numeric pinocchio.rnea of the exported (q, v, a) and its clearance rows the heights of the
-    heel, ball and toe points from forward kinematics (the block computes the motion about the
-    COM and moves the points by the COM's ballistic path); the exported flight is ballistic (no
-    base wrench), its base continuous at takeoff and off the landing's by the touchdown rows."""
+def test_flight_torque_rows_match_numeric_pinocchio_on_the_exported_flight(small_jump, small_export):
+    """With the flight's torque samples at 1 kHz times of the exported ballistic flight, the NLP's
+    flight torque rows are numeric pinocchio.rnea's joint torques of the exported (q, v, a) over
+    their limit range (the block computes the motion about the falling COM at zero pitch); the
+    exported flight is ballistic (no base wrench), its base continuous at takeoff and off the
+    landing's by the touchdown rows at touchdown."""
     sj, tr = small_jump, small_export
     model, ph, robot = sj.js.model, sj.js.phases, sj.robot
     data = model.createData()
-    parts = sj.nlp.variables.unpack(sj.x0)
-    block = sj.blocks["flight"]
-    rows = block.functions["rows"]
     flight = np.where((tr["t"] > ph.takeoff) & (tr["t"] < ph.touchdown))[0]
     assert len(flight) > 300
-    for i in flight[[0, 2, len(flight) // 3, len(flight) // 2, -3, -1]]:
-        t = tr["t"][i]
-        y, yd, ydd = (u[0] for u in joint_motion(sj.layer, sj.nlp.splines[0], tr["control_points"], t))
-        pitch = freeflyer_to_base(tr["q"][i][:7])[0, 2]
-        r = np.concatenate([[pitch], parts["L_to"], parts["c_to"], parts["cd_to"], [t - ph.takeoff]])
-        out = np.asarray(rows(y, yd, ydd, r)).ravel()
+    idx = flight[[0, 2, len(flight) // 3, len(flight) // 2, -3, -1]]
+    jn = build_nlp(robot, sj.layer, sj.blocks, ph, sj.settings, sj.js.init["P"], "distance",
+                   samples=Samples(sj.nlp.meta["samples"].wrench, tr["t"][idx]))
+    kept = robot.unmirrored
+    sl = family(jn, "flight_torque")
+    np.testing.assert_array_equal(np.unique(jn.meta["row_times"][sl]), tr["t"][idx])
+    rows = jn.nlp.constraints(sj.x0)[sl].reshape(len(idx), len(kept))
+    for k, i in enumerate(idx):
         tau = pin.rnea(model, data, tr["q"][i], tr["v"][i], tr["a"][i])
         assert np.abs(tau[:6]).max() < 1e-9 * robot.weight
-        np.testing.assert_allclose(out[block.layout["torque"]], tau[6:][robot.active],
-                                   atol=1e-8 * max(1.0, np.abs(tau).max()))
-        heights = foot_points(model, data, tr["q"][i], sj.js.geom.heel_offset)[2]
-        np.testing.assert_allclose(out[block.layout["flight_clearance"]], heights, atol=1e-10)
+        tj = tau[6:][robot.active[kept]]
+        np.testing.assert_allclose(rows[k] * robot.torque_scale[kept], tj, atol=1e-8 * max(1.0, np.abs(tau).max()))
     # continuous at takeoff; at touchdown the start's landing base is off the flight's by the
     # touchdown rows (it is not a solution)
     base = freeflyer_to_base(tr["q"][:, :7])
@@ -342,6 +344,29 @@ def test_flight_rows_match_numeric_pinocchio_on_the_exported_flight(small_jump, 
     td = sj.nlp.nlp.constraints(sj.x0)[family(sj.nlp, "touchdown")][:3]
     assert np.max(np.abs(td)) > 0.05
     np.testing.assert_allclose(base[i] - base[i - 1], -td, atol=1e-2)
+
+
+def test_flight_clearance_rows_are_the_foot_heights_of_the_ballistic_flight(small_jump):
+    """At the interior flight nodes the clearance rows are the heel, ball and toe heights by
+    forward kinematics of the flight state: the node's pitch, the COM on the parabola of the
+    takeoff state, the base placed from the numeric COM."""
+    sj = small_jump
+    model, jn, ph, smap = sj.js.model, sj.nlp, sj.js.phases, sj.js.smap
+    data = model.createData()
+    parts = jn.variables.unpack(sj.x0)
+    tf = jn.grid["flight"][1:-1]
+    sl = family(jn, "flight_clearance")
+    np.testing.assert_array_equal(np.unique(jn.meta["row_times"][sl]), tf)
+    rows = jn.nlp.constraints(sj.x0)[sl].reshape(len(tf), 3)
+    Y, Yd, _ = joint_motion(sj.layer, jn.splines[0], jn.control_points(sj.x0), tf)
+    for k, t in enumerate(tf):
+        T = t - ph.takeoff
+        c = parts["c_to"] + parts["cd_to"] * T + 0.5 * GRAVITY * T ** 2
+        cd = parts["cd_to"] + GRAVITY * T
+        b, _ = flight_base(model, data, smap, Y[k], Yd[k], parts["pitch_flight"][k + 1], parts["L_to"][0], c, cd)
+        q = full_state(smap, b, np.zeros(3), np.zeros(3), Y[k], Yd[k], np.zeros_like(Y[k]))[0]
+        np.testing.assert_allclose(rows[k], foot_points(model, data, q, sj.js.geom.heel_offset)[2], atol=1e-10)
+    assert rows.min() > 0.0  # the training start's feet are off the ground in flight
 
 
 def test_right_torque_rows_left_out_are_mirror_copies_of_the_left(small_jump, small_export):
