@@ -132,7 +132,7 @@ def test_unknown_or_removed_option_is_refused_by_name(key):
     push-off nodes and free time scale, is an error naming the key, before any set-up or solve."""
     bad = _with_options(**{key: 1})
     n_setups = len(jp._SETUP_CACHE)
-    with pytest.raises(SolveError, match=rf"unknown \[options\] key\(s\) \['{key}'\]"):
+    with pytest.raises(SolveError, match=key):
         jp.solve_jump_problem(bad, tube=0.02, control_points=17)
     with pytest.raises(SolveError, match=key):
         jp.settings_from_problem(bad, 0.02, None)
@@ -142,24 +142,23 @@ def test_unknown_or_removed_option_is_refused_by_name(key):
 def test_bad_sweep_starts_is_refused_by_name():
     bad = _with_options(sweep_starts="cold")
     n_setups = len(jp._SETUP_CACHE)
-    with pytest.raises(SolveError, match=r"\[options\] sweep_starts must be one of \('warm\+cold', 'warm'\), "
-                                         r"got 'cold'"):
+    with pytest.raises(SolveError, match="sweep_starts") as exc:
         jp.solve_jump_problem(bad, tube=0.02, control_points=17)
-    assert len(jp._SETUP_CACHE) == n_setups  # refused before the set-up
+    assert "cold" in str(exc.value) and len(jp._SETUP_CACHE) == n_setups  # refused before the set-up
 
 
 def test_unsupported_method_and_hessian_are_refused_by_name():
     problem = load_problem("broad-jump")
-    with pytest.raises(SolveError, match="broad-jump supports method 'latent' only, got 'joint-range'"):
+    with pytest.raises(SolveError, match="method.*'joint-range'"):
         jp.solve_jump_problem(problem, tube=0.02, method="joint-range")
-    with pytest.raises(SolveError, match="broad-jump supports hessian 'exact' or 'lbfgs', got 'bfgs'"):
+    with pytest.raises(SolveError, match="hessian.*'bfgs'"):
         jp.solve_jump_problem(problem, tube=0.02, hessian="bfgs")
 
 
 @pytest.mark.parametrize("stride", [0, 2.5, 100, "2"])
 def test_bad_training_stride_is_refused_by_name(stride):
     bad = _with_options(training_stride=stride)
-    with pytest.raises(SolveError, match=r"training_stride: training stride must be an integer from 1 to 39"):
+    with pytest.raises(SolveError, match="training_stride"):
         jp.solve_jump_problem(bad, tube=0.02)
 
 

@@ -18,7 +18,7 @@ from jump_reference import (SAGITTAL, flight_base, foot_points, full_state, gene
                             mass_of, momentum, pitch_rate_for, point_forces, polygon_rows)
 from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
 from latentoc.jump.contact import TOE_PAD
-from latentoc.jump.nlp import Samples, build_nlp, default_samples
+from latentoc.jump.nlp import build_nlp, default_samples
 from latentoc.jump.zmp import G
 
 GRAVITY = np.array([0.0, -9.81])
@@ -198,7 +198,7 @@ def test_wrench_samples_lie_between_the_nodes_with_the_scheduled_support(small_j
     np.testing.assert_array_equal(jn.meta["samples"].wrench, default.wrench)
     np.testing.assert_array_equal(default.flight_torque, jn.grid["flight"])
     n0 = build_nlp(robot, sj.layer, sj.blocks, ph, sj.settings, sj.js.init["P"], "feasibility",
-                   samples=Samples(np.zeros(0), default.flight_torque))
+                   samples=dataclasses.replace(default, wrench=np.zeros(0)))
     assert not any(str(k).startswith(("wrench_", "cop_", "torque_free")) for k in n0.row_names)
     assert "wrench" not in n0.nlp.row_offset and n0.variables.n == jn.variables.n
     tw, grid, spacing = jn.meta["samples"].wrench, jn.grid, sj.settings.wrench_spacing
@@ -325,7 +325,7 @@ def test_flight_torque_rows_match_numeric_pinocchio_on_the_exported_flight(small
     assert len(flight) > 300
     idx = flight[[0, 2, len(flight) // 3, len(flight) // 2, -3, -1]]
     jn = build_nlp(robot, sj.layer, sj.blocks, ph, sj.settings, sj.js.init["P"], "distance",
-                   samples=Samples(sj.nlp.meta["samples"].wrench, tr["t"][idx]))
+                   samples=dataclasses.replace(sj.nlp.meta["samples"], flight_torque=tr["t"][idx]))
     kept = robot.unmirrored
     sl = family(jn, "flight_torque")
     np.testing.assert_array_equal(np.unique(jn.meta["row_times"][sl]), tr["t"][idx])
