@@ -1,8 +1,10 @@
-"""Command line: ``python -m latentoc {solve,list,sweep,start-poses,bench} ...``.
+"""Command line: ``python -m latentoc {list,show,solve,sweep,start-poses,bench} ...``.
 
-Input errors (bad problem, infeasible tube, ...) print ``latentoc: error: <message>``
-and exit with code 2 without writing anything. A solve that Ipopt does not finish
-successfully exits with code 1 and writes nothing unless ``--keep-failed``.
+Input errors (:class:`latentoc.LatentocError`: bad problem, infeasible tube, ...) print
+``latentoc: error: <message>`` and exit with code 2 without writing anything; any other
+exception is a bug and ends with its traceback (exit code 1). A solve that Ipopt does not
+finish successfully exits with code 1 and writes nothing unless ``--keep-failed``; a sweep with
+failed tasks writes the others and exits with code 1.
 """
 
 from __future__ import annotations
@@ -11,26 +13,16 @@ import argparse
 import sys
 from importlib import import_module
 from pathlib import Path
+from typing import Any
+
+from .errors import LatentocError, SweepError
 
 __all__ = ["main"]
 
 
-def _input_errors() -> tuple[type[BaseException], ...]:
-    from .gpdm import GPDMInputError
-    from .problem import ProblemError
-    from .solve import SolveError
-    errors: list[type[BaseException]] = [ProblemError, SolveError, GPDMInputError, FileNotFoundError, ValueError]
-    try:
-        from .mocap import MocapFormatError  # type: ignore[attr-defined]
-        errors.append(MocapFormatError)
-    except ImportError:
-        pass
-    return tuple(errors)
-
-
 def _tube_arg(text: str) -> float | str:
     from .problem import parse_tube
-    value, relative = parse_tube(text)  # ValueError -> argparse message
+    value, relative = parse_tube(text)  # ProblemError (a ValueError) -> argparse message
     return text if relative else value
 
 
@@ -39,7 +31,7 @@ def _parser() -> argparse.ArgumentParser:
                                                             "(Kang & Park 2015).")
     sub = p.add_subparsers(dest="command", required=True)
 
-    s = sub.add_parser("solve", help="solve a problem and write result.json + trajectory.npz")
+    s = sub.add_parser("solve", help="solve a problem and write result.json, trajectory.npz, gpdm.npz")
     s.add_argument("problem", help="problem name (see `list`) or path to a .toml file")
     s.add_argument("--tube", type=str, default=None, help='delta: a number, or "<k>x" relative (default: the problem\'s)')
     s.add_argument("--latent-dim", type=int, default=None)
@@ -47,13 +39,16 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
     s.add_argument("--method", choices=["latent", "joint-range"], default="latent")
     s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
-    s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>)")
+    s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>-<method>)")
     s.add_argument("--quiet", action="store_true", help="no progress display")
     s.add_argument("--verbose", action="store_true", help="Ipopt's own iteration log")
     s.add_argument("--keep-failed", action="store_true", help="write files even if Ipopt did not succeed")
     s.add_argument("--plots", action="store_true", help="also write PNG figures (and motion.gif) to OUT/plots")
 
-    sub.add_parser("list", help="list the packaged problems")
+    ls = sub.add_parser("list", help="list the packaged problems")
+    ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
+    sh = sub.add_parser("show", help="a problem's resolved settings, one key per line")
+    sh.add_argument("problem")
 
     w = sub.add_parser("sweep", help="tube sweep (and joint-range baseline), a table like the paper's Table 2")
     w.add_argument("problem")
@@ -62,7 +57,10 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--ranges", nargs="*", type=float, default=None, help="joint ranges, deg")
     w.add_argument("--latent-dim", type=int, default=None)
     w.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
-    w.add_argument("--out", type=Path, default=None)
+    w.add_argument("--out", type=Path, default=None, help="folder of the sweep: OUT/<task>/ per solve, sweep.json")
+    w.add_argument("--workers", type=int, default=None, help="solve on a Dask LocalCluster of N worker processes")
+    w.add_argument("--scheduler", default=None, help="solve on an existing Dask cluster, tcp://HOST:PORT")
+    w.add_argument("--resume", action="store_true", help="skip the tasks whose folder in OUT is complete")
     w.add_argument("--plots", action="store_true", help="also write OUT/gain_vs_tube.png")
     w.add_argument("--quiet", action="store_true", help="no progress display")
 
@@ -78,93 +76,148 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _cmd_list() -> int:
-    from .problem import load_problem, problem_names
+def _overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The problem settings given on the command line (those not None)."""
+    values = {"tube": _tube_arg(args.tube) if getattr(args, "tube", None) is not None else None,
+              "latent_dim": getattr(args, "latent_dim", None), "control_points": getattr(args, "control_points", None),
+              "hessian": getattr(args, "hessian", None)}
+    return {k: values[k] for k in names if values[k] is not None}
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    from .problem import describe_problem, load_problem, problem_names
     for name in problem_names():
-        print(f"{name:24s} {load_problem(name).description}")
+        problem = load_problem(name)
+        print(describe_problem(problem) + "\n" if args.verbose else f"{name:24s} {problem.description}")
     return 0
 
 
-def _cmd_solve(args: argparse.Namespace) -> int:
-    from .problem import load_problem
-    from .results import write_solution
-    from .solve import solve
+def _cmd_show(args: argparse.Namespace) -> int:
+    from .problem import describe_problem, load_problem
+    print(describe_problem(load_problem(args.problem)))
+    return 0
 
-    problem = load_problem(args.problem)
-    tube = _tube_arg(args.tube) if args.tube is not None else None
-    sol = solve(problem, tube=tube, latent_dim=args.latent_dim, control_points=args.control_points,
-                hessian=args.hessian, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose)
-    r = sol.result
-    print(f"{r['problem']} ({r['method']}): {r['status']} after {r['iterations']} iterations")
-    print(f"  cost {r['cost_initial']:.3f} -> {r['cost']:.3f}  (gain {r['performance_gain_pct']:.2f} %)")
-    if r.get("tube") is not None:
-        print(f"  tube delta {r['tube']:.4g} ({r['tube_spec']}; {r['tube_relative']:.3g} x noise), "
-              f"max violation on 1 kHz grid {r['max_tube_violation']:.3g}")
-    if r.get("joint_range_deg") is not None:
-        print(f"  joint range +-{r['joint_range_deg']:g} deg")
-    if r.get("max_dynamics_residual") is not None:  # contact problems: the exported motion's 1 kHz checks
-        print(f"  1 kHz checks: base residual {r['max_dynamics_residual']:.2g} body weights, min normal force "
-              f"{r['min_normal_force']:.1f} N, friction ratio {r['max_friction_ratio']:.3f} (mu {r['friction']:g}), "
-              f"centre-of-pressure margin {r.get('cop_margin_loaded', r['cop_margin']):.3f} m, "
-              f"ZMP margin {r['zmp_margin']:.3f} m, COM margin {r['com_margin']:.3f} m, "
-              f"torque-limit excess {r['max_torque_violation']:.2g} N m")
-        if r.get("toe_slip") is not None:
-            print(f"  toe tip: forward travel {r['toe_displacement']:.3f} m; in contact slip {100 * r['toe_slip']:.2f} cm, "
-                  f"height up to {100 * r['max_toe_height']:.2f} cm")
-        if r.get("eq33_feet_distance") is not None:
-            print(f"  Eq. 33 feet distance (both toe tips) {r['eq33_feet_distance']:.3f} m")
-    print(f"  times: gpdm {r['gpdm_time_s']:.2f} s, build {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s;"
-          f" quadrature error {r['quadrature_error']:.2e}")
-    if not sol.success and not args.keep_failed:
+
+def summary(r: Any) -> str:
+    """The lines ``solve`` prints about a :class:`~latentoc.results.Result`."""
+    d = r.details
+    lines = [f"{r.problem} ({r.method}): {r.status} after {r.iterations} iterations",
+             f"  cost {r.cost_initial:.3f} -> {r.cost:.3f}  (gain {r.gain_pct:.2f} %)"]
+    if r.tube is not None:
+        lines.append(f"  tube delta {r.tube.delta:.4g} ({r.tube.spec}; {r.tube.relative:.3g} x noise), "
+                     f"max violation on 1 kHz grid {r.violations['tube']:.3g}")
+    if d.get("joint_range_deg") is not None:
+        lines.append(f"  joint range +-{d['joint_range_deg']:g} deg")
+    if d.get("max_dynamics_residual") is not None:  # contact problems: the exported motion's 1 kHz checks
+        lines.append(f"  1 kHz checks: base residual {d['max_dynamics_residual']:.2g} body weights, min normal force "
+                     f"{d['min_normal_force']:.1f} N, friction ratio {d['max_friction_ratio']:.3f} "
+                     f"(mu {d['friction']:g}), centre-of-pressure margin {d.get('cop_margin_loaded', d['cop_margin']):.3f}"
+                     f" m, ZMP margin {d['zmp_margin']:.3f} m, COM margin {d['com_margin']:.3f} m, "
+                     f"torque-limit excess {d['max_torque_violation']:.2g} N m")
+        if d.get("toe_slip") is not None:
+            lines.append(f"  toe tip: forward travel {d['toe_displacement']:.3f} m; in contact slip "
+                         f"{100 * d['toe_slip']:.2f} cm, height up to {100 * d['max_toe_height']:.2f} cm")
+        if d.get("eq33_feet_distance") is not None:
+            lines.append(f"  Eq. 33 feet distance (both toe tips) {d['eq33_feet_distance']:.3f} m")
+    lines.append(f"  times: gpdm {r.times.gpdm_s:.2f} s, build {r.times.build_s:.2f} s, solve {r.times.solve_s:.2f} s;"
+                 f" quadrature error {d.get('quadrature_error', 0.0):.2e}")
+    return "\n".join(lines)
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from .api import solve
+    from .problem import load_problem
+
+    problem = load_problem(args.problem, **_overrides(args, "tube", "latent_dim", "control_points", "hessian"))
+    r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose)
+    print(summary(r))
+    if not r.success and not args.keep_failed:
         print("latentoc: solve did not succeed; nothing written (use --keep-failed to write anyway)", file=sys.stderr)
         return 1
-    out = args.out if args.out is not None else Path("out") / f"{r['problem']}-{r['method']}"
-    paths = write_solution(sol, out)
+    out = args.out if args.out is not None else Path("out") / f"{r.problem}-{r.method}"
+    paths = r.save(out)
     print("  wrote " + ", ".join(str(p) for p in paths))
     if args.plots:
         from .plots import plot_solution
 
         figures = plot_solution(out, gif=True)
         print(f"  plots: {len(figures)} figures in {out / 'plots'}")
-    return 0 if sol.success else 1
+    return 0 if r.success else 1
+
+
+def _executor(args: argparse.Namespace) -> Any:
+    """A Dask client for --workers / --scheduler, else None (serial)."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    if args.workers is not None and args.scheduler is not None:
+        raise SweepError("give --workers (a local cluster) or --scheduler (an existing one), not both")
+    if args.workers is not None and args.workers < 1:
+        raise SweepError(f"--workers must be a positive number of processes, got {args.workers}")
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise SweepError("--workers and --scheduler need Dask: pip install 'latentoc[distributed]'") from None
+    if args.scheduler is not None:
+        try:
+            return Client(args.scheduler, timeout=10)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise SweepError(f"no Dask scheduler at {args.scheduler}: {exc}") from None
+    return Client(LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None))
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from .problem import load_problem, parse_tube
+    from .problem import load_problem
     from .sweep import format_table, sweep, write_sweep
 
-    problem = load_problem(args.problem)
+    problem = load_problem(args.problem, **_overrides(args, "latent_dim", "hessian"))
     tubes = problem.sweep_tubes if args.tubes is None else [_tube_arg(t) for t in args.tubes]
-    for t in tubes:
-        parse_tube(t)
-    ranges = None
+    ranges: list[float] = []
     if args.baseline == "joint-range":
         ranges = problem.sweep_ranges if args.ranges is None else args.ranges
-        if any(k <= 0 for k in ranges):
-            raise ValueError("joint ranges must be positive degrees")
-    rows = sweep(problem, tubes, ranges, latent_dim=args.latent_dim, hessian=args.hessian)
-    print(format_table(rows))
-    if args.out is not None:
-        meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "latent_dim": args.latent_dim}
-        paths = write_sweep(rows, args.out, meta)
-        print("wrote " + ", ".join(str(p) for p in paths))
-    if args.plots:
+    out = args.out
+    client = _executor(args)
+    try:
+        outcome = sweep(problem, tubes, client, baseline_ranges=ranges, out=out, resume=args.resume,
+                        progress=None if args.quiet else lambda line: print(line, flush=True))
+    finally:
+        if client is not None:
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None and args.workers is not None:
+                cluster.close()
+    print(format_table(outcome.results))
+    if out is not None:
+        meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "workers": args.workers,
+                "scheduler": args.scheduler, "warm_start": client is None}
+        print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))
+    if args.plots and outcome.results:
         from .plots import plot_gain_vs_tube
 
-        out = args.out if args.out is not None else Path("out") / f"{problem.name}-sweep"
-        print("wrote " + str(plot_gain_vs_tube(rows, out / "gain_vs_tube.png", title=f"{problem.name}: gain vs tube")))
-    return 0
+        folder = out if out is not None else Path("out") / f"{problem.name}-sweep"
+        print("wrote " + str(plot_gain_vs_tube(outcome.results, folder / "gain_vs_tube.png",
+                                               title=f"{problem.name}: gain vs tube")))
+    for f in outcome.failures:
+        print(f"latentoc: task {f.label} failed: {f.error}: {f.message}", file=sys.stderr)
+        if f.traceback and not f.input_error:
+            print(f.traceback, file=sys.stderr)
+    return 1 if outcome.failures else 0
 
 
 def _cmd_start_poses(args: argparse.Namespace) -> int:
     from .problem import load_problem
     from .results import write_json
     from .robots import load_robot
-    from .solve import problem_gpdm, resolve_tube
+    from .solve import resolve_tube
     from .start_poses import start_pose_distances
 
-    problem = load_problem(args.problem)
-    gp, _ = problem_gpdm(problem, args.latent_dim)
+    problem = load_problem(args.problem, **_overrides(args, "latent_dim"))
+    if problem.kind != "latent-min-torque":
+        raise LatentocError(f"start-poses is for latent-min-torque problems (Sect. 4.1.4), {problem.name!r} is "
+                            f"a {problem.kind} problem")
+    from .min_torque_problem import problem_gpdm
+
+    gp, _ = problem_gpdm(problem)
     specs = problem.start_pose_tubes if args.tubes is None else [_tube_arg(t) for t in args.tubes]
     ref = gp.tube_size()
     deltas = [resolve_tube(s, ref) for s in specs]
@@ -188,7 +241,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     try:
         module = import_module(f"latentoc.benchmarks.{name}_bench")
     except ModuleNotFoundError:
-        raise ValueError(f"unknown benchmark {args.name!r}") from None
+        raise LatentocError(f"unknown benchmark {args.name!r}") from None
     return int(module.main(args.rest) or 0)
 
 
@@ -200,11 +253,11 @@ def main(argv: list[str] | None = None) -> int:
 
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
-    commands = {"list": lambda a: _cmd_list(), "solve": _cmd_solve, "sweep": _cmd_sweep,
+    commands = {"list": _cmd_list, "show": _cmd_show, "solve": _cmd_solve, "sweep": _cmd_sweep,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:
         return commands[args.command](args)
-    except _input_errors() as exc:
+    except LatentocError as exc:
         print(f"latentoc: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

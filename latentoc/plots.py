@@ -8,7 +8,6 @@ fits a solved problem from its ``result.json`` and ``trajectory.npz``.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,8 @@ import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
+
+from .results import Result
 
 __all__ = [
     "DPI", "FIGSIZES", "pixel_size", "tube_mesh", "joint_positions", "skeleton_segments",
@@ -254,7 +255,9 @@ def plot_latent_tube(gpdm: Any, delta: float, path: str | Path,
             ax.plot(c[:, 0], c[:, 1], styles[i % 4], color=colour[name], lw=2, label=name)
         for name, c in ctrl.items():
             ax.plot(c[:, 0], c[:, 1], "o", color=colour[name], mec="k", ms=7, label=name)
-        ax.set_xlabel("$x_1$"), ax.set_ylabel("$x_2$"), ax.set_aspect("equal", "datalim")
+        ax.set_xlabel("$x_1$")
+        ax.set_ylabel("$x_2$")
+        ax.set_aspect("equal", "datalim")
     else:
         raise ValueError(f"latent_dim must be 2 or 3, got {d}")
     ax.legend(loc="upper left", fontsize=8)
@@ -373,43 +376,26 @@ def _log_x(ax: Any, x: np.ndarray) -> None:
         ax.xaxis.set_minor_formatter(NullFormatter())
 
 
-def _row_value(row: Mapping[str, Any], keys: Sequence[str]) -> float:
-    for k in keys:
-        if k in row and row[k] is not None:
-            return float(row[k])
-    raise KeyError(f"row has none of {list(keys)}: {sorted(row)}")
-
-
-TUBE_KEYS = ("tube", "delta", "tube_size")
-GAIN_KEYS = ("performance_gain_pct", "gain_pct", "performance_gain", "gain")
-
-
-def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
+def plot_gain_vs_tube(results: Sequence[Result], path: str | Path,
                       reference: Sequence[tuple[float, float]] | None = None,
                       title: str | None = None) -> Path:
     """Performance gain [%] against tube size delta, log-x (Tables 2, 4, 6).
 
-    ``sweep_rows`` are :func:`latentoc.sweep.sweep` rows (or any dicts with a
-    tube key ``tube``/``delta`` and ``performance_gain_pct``); rows of the
-    full-space baseline (``joint_range_deg``, no tube) go to a second panel,
-    gain against joint range (Table 2, right).  Unsuccessful solves are drawn
-    as open markers.  ``reference`` (delta, gain) pairs, e.g. the paper's, are
-    drawn for comparison.
+    ``results`` are :class:`~latentoc.results.Result` (a sweep's); those of the full-space
+    baseline (``method`` "joint-range") go to a second panel, gain against joint range (Table 2,
+    right). Unsuccessful solves are drawn as open markers. ``reference`` (delta, gain) pairs,
+    e.g. the paper's, are drawn for comparison.
     """
-    def has(r: Mapping[str, Any], keys: Sequence[str]) -> bool:
-        return any(r.get(k) is not None for k in keys)
-
-    lat = sorted((r for r in sweep_rows if has(r, TUBE_KEYS)), key=lambda r: _row_value(r, TUBE_KEYS))
-    base = sorted((r for r in sweep_rows if not has(r, TUBE_KEYS) and r.get("joint_range_deg") is not None),
-                  key=lambda r: float(r["joint_range_deg"]))
+    lat = sorted((r for r in results if r.tube is not None), key=lambda r: r.tube.delta)  # type: ignore[union-attr]
+    base = sorted((r for r in results if r.method == "joint-range"), key=lambda r: r.details["joint_range_deg"])
     if not lat and not base:
-        raise ValueError("sweep_rows has no row with a tube size or a joint range")
+        raise ValueError("results has no result with a tube or a joint range")
     fig = _figure("gain_vs_tube")
     axes = fig.subplots(1, 2 if base and lat else 1, squeeze=False)[0]
 
-    def draw(ax, rows, x, xlabel, label):
-        y = np.array([_row_value(r, GAIN_KEYS) for r in rows])
-        ok = np.array([bool(r.get("success", True)) for r in rows])
+    def draw(ax: Any, rows: Sequence[Result], x: np.ndarray, xlabel: str, label: str) -> None:
+        y = np.array([r.gain_pct for r in rows])
+        ok = np.array([r.success for r in rows])
         ax.plot(x, y, "-", color="C0", lw=1)
         ax.plot(x[ok], y[ok], "o", color="C0", label=label)
         if not ok.all():
@@ -420,7 +406,7 @@ def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
 
     if lat:
         ax = axes[0]
-        x = np.array([_row_value(r, TUBE_KEYS) for r in lat])
+        x = np.array([r.tube.delta for r in lat])  # type: ignore[union-attr]
         draw(ax, lat, x, r"tube size $\delta$", "latent (GPDM)")
         if reference is not None:
             ref = np.asarray(reference, dtype=float)
@@ -430,7 +416,7 @@ def plot_gain_vs_tube(sweep_rows: Sequence[Mapping[str, Any]], path: str | Path,
         ax.legend(fontsize=8)
     if base:
         ax = axes[-1]
-        draw(ax, base, np.array([float(r["joint_range_deg"]) for r in base]),
+        draw(ax, base, np.array([float(r.details["joint_range_deg"]) for r in base]),
              "joint range [$\\pm$deg]", "full configuration space")
         ax.legend(fontsize=8)
     if title:
@@ -504,7 +490,7 @@ def plot_stick_frames(model: pin.Model, Q: np.ndarray | Mapping[str, np.ndarray]
     idx = {k: frame_indices(len(M), frames) for k, M in motions.items()}
     segs = {k: [skeleton_segments(model, M[i], return_names=True) for i in idx[k]]
             for k, M in motions.items()}
-    colours = {}
+    colours: dict[str, str] = {}
     for v in segs.values():
         for _, names in v:
             for n in names:
@@ -559,14 +545,6 @@ def plot_stick_frames(model: pin.Model, Q: np.ndarray | Mapping[str, np.ndarray]
 
 
 # ------------------------------------------------------------------ solution
-def _pick(store: Mapping[str, Any], *keys: str) -> Any:
-    """The first of ``keys`` present in ``store`` (None if none is)."""
-    for k in keys:
-        if k in store:
-            return store[k]
-    return None
-
-
 def _actuated(model: pin.Model, max_joints: int, Q: np.ndarray) -> tuple[list[str], np.ndarray, np.ndarray]:
     """Names, q indices and v indices of the 1-DOF joints; if more than ``max_joints``, the
     ones moving most in Q."""
@@ -593,9 +571,7 @@ def _landing_balance(model: pin.Model, traj: Mapping[str, np.ndarray]) -> tuple[
     from .jump.training import FOOT, TOE
     from .jump.zmp import zmp as zmp_point
     t, Q, V, A = (np.asarray(traj[k]) for k in ("t", "q", "v", "a"))
-    land = t >= float(traj["touchdown"]) - 1e-9
-    if "contact" in traj:
-        land &= np.asarray(traj["contact"]).astype(bool)
+    land = (t >= float(traj["touchdown"]) - 1e-9) & np.asarray(traj["contact"]).astype(bool)
     data = model.createData()
     mass = sum(i.mass for i in model.inertias)
     zmp, com = [], []
@@ -612,108 +588,70 @@ def _landing_balance(model: pin.Model, traj: Mapping[str, np.ndarray]) -> tuple[
     return np.array(zmp).reshape(-1, 2), np.array(com).reshape(-1, 3), poly, t[land]
 
 
-def _solution_gpdm(out_dir: Path, result: Mapping[str, Any]) -> Any:
-    """The solution's GPDM: ``gpdm.npz`` beside the result, else (for the arm's
-    ``latent-min-torque`` kind) re-learned from its problem, which is deterministic;
-    else None."""
-    from .gpdm import GPDM
-    if (out_dir / "gpdm.npz").exists():
-        return GPDM.load(out_dir / "gpdm.npz")
-    source = result.get("problem_source") or result.get("problem")
-    if not source or "latent_dim" not in result or result.get("kind") != "latent-min-torque":
-        return None  # other kinds (the jump) learn their own GPDM: only a saved one is used
-    try:
-        from .problem import load_problem
-        from .solve import problem_gpdm
-        return problem_gpdm(load_problem(source), int(result["latent_dim"]))[0]
-    except Exception:  # problem file gone or unreadable: skip the latent figure
-        return None
+def plot_solution(result: Result | str | Path, max_joints: int = 12, plane: str | None = None,
+                  gif: bool = False, out_dir: str | Path | None = None) -> list[Path]:
+    """Write the figures of a :class:`~latentoc.results.Result` (or of the result folder a path
+    names) into ``out_dir`` (default: the folder's ``plots/``) and return their paths.
 
-
-def plot_solution(out_dir: str | Path, max_joints: int = 12, plane: str | None = None,
-                  gif: bool = False) -> list[Path]:
-    """Write the figures of a solved problem (``out_dir/result.json`` and
-    ``trajectory.npz``) into ``out_dir/plots/`` and return their paths.
-
-    Always: joint angles, torques (with limits when recorded) and stick frames;
-    for a latent solution: the tube with the initial and optimised paths and
-    control points (GPDM from ``gpdm.npz`` beside the result, else re-learned
-    from the problem file, which is deterministic); for contact problems:
-    contact forces and ZMP/COM in the support polygon.  With ``gif`` also an
-    animation ``motion.gif`` of the optimised motion (:func:`latentoc.animation.animate`).
+    Only the result schema is read (:data:`latentoc.results.TRAJECTORY_KEYS`): always joint
+    angles, torques (with ``tau_min``/``tau_max`` when recorded) and stick frames (with the
+    training fit ``q_initial`` when recorded); for a latent solution the tube with the paths
+    (``x``, ``x_initial``) and control points (``P``, ``P_initial``) in the result's GPDM; for the
+    broad jump (``wrench``, ``contact``, ``touchdown``, ``heel_offset``) the foot forces and the
+    landing's ZMP and COM in the support polygon. With ``gif`` also an animation ``motion.gif``
+    of the optimised motion (:func:`latentoc.animation.animate`).
     """
-    out_dir = Path(out_dir)
-    result = json.loads((out_dir / "result.json").read_text())
-    traj = dict(np.load(out_dir / "trajectory.npz", allow_pickle=False))
-    plot_dir = out_dir / "plots"
+    from .results import load_result
+
+    if not isinstance(result, Result):
+        folder = Path(result)
+        result = load_result(folder)
+        out_dir = folder / "plots" if out_dir is None else out_dir
+    if out_dir is None:
+        raise ValueError("plot_solution needs out_dir for a Result that was not read from a folder")
+    plot_dir = Path(out_dir)
+    traj = result.trajectory
     model = pin.Model()
     model.loadFromString(str(traj["model"]))
-    t, q = traj["t"], traj["q"]
-    q0 = _pick(traj, "q_initial", "q0", "initial_q")
-    tau, tau0 = traj.get("tau"), _pick(traj, "tau_initial", "tau0", "initial_tau")
-    same_grid = q0 is not None and len(q0) == len(t)  # an initial motion may have its own rate
-    if tau0 is None and same_grid and model.nq == model.nv and len(t) > 2:
-        tau0 = _inverse_dynamics(model, t, q0)
-    if tau0 is not None and len(tau0) != len(t):
-        tau0 = None
+    t, q, tau = traj["t"], traj["q"], traj["tau"]
+    q0 = traj.get("q_initial")
+    q0_grid = q0 if q0 is not None and len(q0) == len(t) else None  # an initial motion may have its own rate
+    tau0 = _inverse_dynamics(model, t, q0_grid) if q0_grid is not None and model.nq == model.nv and len(t) > 2 \
+        else None
     names, iq, iv = _actuated(model, max_joints, q)
     floating = model.njoints > 1 and model.joints[1].nq == 7
     plane = plane or ("xz" if floating else "yz")
-    title = result.get("problem", out_dir.name)
+    title = result.problem
     written: list[Path] = []
 
     qs = {"optimised": q[:, iq]}
-    if same_grid:
-        qs = {"initial": q0[:, iq], **qs}
+    if q0_grid is not None:
+        qs = {"initial": q0_grid[:, iq], **qs}
     written.append(plot_joint_curves(t, qs, names, plot_dir / "joint_angles.png"))
-    if tau is not None:
-        jv = iv - (model.nv - tau.shape[1])  # tau may hold the actuated joints only
-        taus = {"optimised": tau[:, jv]}
-        if tau0 is not None:
-            taus = {"initial": tau0[:, jv], **taus}
-        lo, hi = _pick(traj, "tau_min"), _pick(traj, "tau_max")
-        limits = (np.broadcast_to(lo, tau.shape[1:])[jv], np.broadcast_to(hi, tau.shape[1:])[jv]) \
-            if lo is not None and hi is not None else None
-        written.append(plot_torques(t, taus, names, plot_dir / "torques.png", limits=limits))
+    jv = iv - (model.nv - tau.shape[1])  # tau may hold the actuated joints only
+    taus = {"optimised": tau[:, jv]}
+    if tau0 is not None:
+        taus = {"initial": tau0[:, jv], **taus}
+    limits = (traj["tau_min"][jv], traj["tau_max"][jv]) if "tau_min" in traj else None
+    written.append(plot_torques(t, taus, names, plot_dir / "torques.png", limits=limits))
     motions = {"optimised": q} if q0 is None else {"initial": q0, "optimised": q}
     written.append(plot_stick_frames(model, motions, plot_dir / "stick_frames.png", plane=plane))
 
-    forces = _pick(traj, "contact_forces", "forces")
-    cnames = _pick(traj, "contact_frames", "contact_names")
-    if forces is None and "wrench" in traj and cnames is not None:  # one wrench per (symmetric) foot
-        mask = traj["contact"].astype(bool) if "contact" in traj else np.ones(len(t), bool)
-        forces = np.repeat((traj["wrench"][:, :3] * mask[:, None])[:, None, :], len(cnames), axis=1)
-    if forces is not None and cnames is not None:
-        tf = _pick(traj, "t_contact", "t_forces")
-        written.append(plot_contact_forces(t if tf is None else tf, forces, [str(n) for n in cnames],
-                                           plot_dir / "contact_forces.png"))
-    zmp, com, poly = _pick(traj, "zmp"), _pick(traj, "com"), _pick(traj, "support_polygon")
-    t_zmp = _pick(traj, "t_zmp")
-    if zmp is None and "touchdown" in traj and "heel_offset" in traj:
+    if "wrench" in traj:  # the broad jump: one toe-tip wrench per (symmetric) foot
+        forces = (traj["wrench"][:, :3] * traj["contact"][:, None])[:, None, :]
+        written.append(plot_contact_forces(t, forces, ["each foot"], plot_dir / "contact_forces.png"))
         zmp, com, poly, t_zmp = _landing_balance(model, traj)
-    if zmp is not None and com is not None and poly is not None:
-        written.append(plot_zmp_com(zmp, com, poly, plot_dir / "zmp_com.png",
-                                    t=t_zmp if t_zmp is not None else (t if len(t) == len(zmp) else None)))
+        written.append(plot_zmp_com(zmp, com, poly, plot_dir / "zmp_com.png", t=t_zmp))
 
-    x = _pick(traj, "x", "latent")
-    gpdm = _solution_gpdm(out_dir, result) if x is not None else None
-    if gpdm is not None and gpdm.latent_dim in (2, 3):
-        paths = {"optimised": x}
-        ctrl = {}
-        P0 = _pick(traj, "P_initial")
-        x0 = _pick(traj, "x_initial")
-        if x0 is None and P0 is not None:
-            from .spline import BSpline
-            spline = BSpline(len(P0), float(t[-1] - t[0]), int(result.get("spline_degree", 3)))
-            x0 = spline.evaluate(P0, t - t[0])
-        if x0 is not None:
-            paths = {"initial": x0, **paths}
-        if P0 is not None:
-            ctrl["initial control points"] = P0
-        if _pick(traj, "P") is not None:
-            ctrl["optimised control points"] = traj["P"]
-        delta = float(_pick(result, "tube", "delta"))
-        written.append(plot_latent_tube(gpdm, delta, plot_dir / "latent_tube.png", paths=paths,
+    if "x" in traj and result.gpdm is not None and result.tube is not None and result.gpdm.latent_dim in (2, 3):
+        paths = {"optimised": traj["x"]}
+        if "x_initial" in traj:
+            paths = {"initial": traj["x_initial"], **paths}
+        ctrl = {"optimised control points": traj["P"]}
+        if "P_initial" in traj:
+            ctrl = {"initial control points": traj["P_initial"], **ctrl}
+        delta = result.tube.delta
+        written.append(plot_latent_tube(result.gpdm, delta, plot_dir / "latent_tube.png", paths=paths,
                                         control_points=ctrl, title=f"{title}: delta = {delta:.3g}"))
     if gif:
         from .animation import animate

@@ -1,33 +1,291 @@
-"""Writing and reading a solved problem: ``result.json`` and ``trajectory.npz``.
+"""The result schema: :class:`Result`, its folder (``result.json``, ``trajectory.npz``, ``gpdm.npz``).
 
-Both files are written atomically: to a temporary file in the output folder, then
-``os.replace``d into place, so a reader never sees a half-written file.
+``result.json`` holds :data:`SCHEMA_VERSION` and the same core fields for every kind (problem,
+kind, method, status, success, iterations, cost_initial, cost, gain_pct, cost_meaning, times,
+tube, violations, environment, the problem's resolved settings), then ``details``, the kind's
+own fields. ``trajectory.npz`` holds the arrays of :data:`TRAJECTORY_KEYS`, the one list of its
+keys; ``gpdm.npz`` the GPDM the motion was optimised in (:meth:`latentoc.gpdm.GPDM.save`), so a
+folder is self-contained: the plots read nothing else. Each file is written atomically (a
+temporary file, then ``os.replace``) and ``result.json`` last, so a folder with a
+``result.json`` is complete.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import platform
 import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
+from .errors import ResultFileError
+from .gpdm import GPDM
+from .problem import Problem
 from .solve import Solution
 
-__all__ = ["write_solution", "read_solution", "atomic_write", "RESULT_NAME", "TRAJECTORY_NAME"]
+__all__ = ["Result", "Times", "TubeResult", "Environment", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
+           "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json"]
 
-RESULT_NAME = "result.json"
-TRAJECTORY_NAME = "trajectory.npz"
+SCHEMA_VERSION = 1
+RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME = "result.json", "trajectory.npz", "gpdm.npz"
+
+#: every key of trajectory.npz: key -> what it holds (n = samples of the 1 kHz grid)
+TRAJECTORY_KEYS: dict[str, str] = {
+    # every kind
+    "t": "time, s (n)",
+    "q": "configuration (n x nq); a free-flyer base first",
+    "v": "velocity (n x nv)",
+    "a": "acceleration (n x nv)",
+    "tau": "joint torques (n x nv, or n x (nv - 6) without the free-flyer base)",
+    "model": "pinocchio.Model.saveToString() of the robot",
+    # a latent solve (the arm's latent method, the broad jump)
+    "x": "latent path (n x d)",
+    "P": "spline control points: latent (m x d), or joint (m x nq) for the joint-range method",
+    "sigma2": "GPDM variance along x (n), Eq. 19",
+    # the arm (latent-min-torque)
+    "x_initial": "latent path of the training fit (n x d)",
+    "P_initial": "control points of the training fit",
+    "q_initial": "configuration along the training fit (n x nq)",
+    # the broad jump: contacts and limits (latentoc.jump.export)
+    "wrench": "toe-tip wrench of each (symmetric) foot, N and N m (n x 6)",
+    "point_forces": "heel, ball and toe forces of each foot (n x 3 x 2)",
+    "point_lambda": "friction-pyramid edge weights, body weights (n x 6)",
+    "force_correction": "largest change of the interpolated edge weights that balances the base rows (n)",
+    "contact": "1 where the feet are on the ground (n)",
+    "loaded": "1 where heel, ball, toe carry load (n x 3)",
+    "node_t": "contact node times, s",
+    "node_wrench": "toe-tip wrench at the contact nodes",
+    "node_lambda": "edge weights at the contact nodes",
+    "contact_frames": "names of the contact frames",
+    "contact_points": "names of the contact points (heel, ball, toe)",
+    "heel_offset": "heel point in the foot frame, m (3)",
+    "takeoff": "takeoff time, s",
+    "touchdown": "touchdown time, s",
+    "settle": "end of the landing's settling, s",
+    "tau_min": "lower torque limits, N m (nv - 6)",
+    "tau_max": "upper torque limits, N m (nv - 6)",
+    "friction": "friction coefficient mu",
+}
+_REQUIRED_ARRAYS = ("t", "q", "v", "a", "tau", "model")
 
 
-def _json_default(value: Any) -> Any:
-    if isinstance(value, np.generic):
-        return value.item()
+@dataclass(frozen=True)
+class Times:
+    """Wall times of one solve, s: GPDM learning (0 when reused), NLP build, block compilation, Ipopt."""
+
+    gpdm_s: float = 0.0
+    build_s: float = 0.0
+    compile_s: float = 0.0
+    solve_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class TubeResult:
+    """The variance tube (Eq. 29): the spec, delta, delta x beta_3, tube_training (Eq. 30) and the
+    largest sigma^2 along the optimised path on the 1 kHz grid."""
+
+    spec: float | str
+    delta: float
+    relative: float
+    training: float
+    max_sigma2: float
+
+
+@dataclass(frozen=True)
+class Environment:
+    """Where a result was computed: package versions, CPU, threads."""
+
+    latentoc: str
+    casadi: str
+    pinocchio: str
+    numpy: str
+    python: str
+    cpu: str
+    cpu_count: int
+    threads: int
+
+    @classmethod
+    def current(cls) -> Environment:
+        import casadi
+        import pinocchio
+
+        from .version import __version__
+        from .nlp.jit import threads
+
+        return cls(latentoc=__version__, casadi=casadi.CasadiMeta.version(), pinocchio=getattr(pinocchio, "__version__", "?"),
+                   numpy=np.__version__, python=platform.python_version(), cpu=_cpu_name(),
+                   cpu_count=os.cpu_count() or 1, threads=threads())
+
+
+def _cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+# the kind contract's result keys that become core fields (the rest are the kind's details)
+_CORE_KEYS = ("problem", "kind", "method", "status", "success", "iterations", "cost_initial", "cost",
+              "performance_gain_pct", "cost_meaning", "gpdm_time_s", "build_time_s", "compile_time_s",
+              "solve_time_s", "tube_spec", "tube", "tube_relative", "tube_training", "max_sigma2", "violations")
+
+
+@dataclass
+class Result:
+    """One solved problem in the versioned result schema (module doc)."""
+
+    problem: str
+    kind: str
+    method: str
+    status: str
+    success: bool
+    iterations: int
+    cost_initial: float
+    cost: float
+    gain_pct: float
+    cost_meaning: str
+    times: Times
+    tube: TubeResult | None
+    violations: dict[str, float]
+    environment: Environment
+    settings: dict[str, Any]
+    details: dict[str, Any] = field(default_factory=dict)
+    trajectory: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    gpdm: GPDM | None = field(default=None, repr=False)
+    warm: dict[str, Any] | None = field(default=None, repr=False)  # for a neighbouring tube; not saved
+    schema_version: int = SCHEMA_VERSION
+
+    @classmethod
+    def from_solution(cls, solution: Solution, problem: Problem) -> Result:
+        """A kind's :class:`~latentoc.solve.Solution` of ``problem`` in the schema."""
+        r = solution.result
+        tube = None
+        if r.get("tube") is not None:
+            tube = TubeResult(spec=r["tube_spec"], delta=float(r["tube"]), relative=float(r["tube_relative"]),
+                              training=float(r["tube_training"]), max_sigma2=float(r["max_sigma2"]))
+        unknown = set(solution.trajectory) - set(TRAJECTORY_KEYS)
+        if unknown:
+            raise KeyError(f"trajectory keys {sorted(unknown)} are not in latentoc.results.TRAJECTORY_KEYS")
+        return cls(problem=r["problem"], kind=r["kind"], method=r["method"], status=r["status"],
+                   success=bool(r["success"]), iterations=int(r["iterations"]),
+                   cost_initial=float(r["cost_initial"]), cost=float(r["cost"]),
+                   gain_pct=float(r["performance_gain_pct"]), cost_meaning=r["cost_meaning"],
+                   times=Times(gpdm_s=r.get("gpdm_time_s", 0.0), build_s=r.get("build_time_s", 0.0),
+                               compile_s=r.get("compile_time_s", 0.0), solve_s=r["solve_time_s"]),
+                   tube=tube, violations={k: float(v) for k, v in r["violations"].items()},
+                   environment=Environment.current(), settings=dict(problem.settings),
+                   details={"source": problem.source, **{k: v for k, v in r.items() if k not in _CORE_KEYS}},
+                   trajectory=dict(solution.trajectory), gpdm=solution.gpdm, warm=solution.warm)
+
+    # ------------------------------------------------------------------ JSON and files
+    def to_json(self) -> dict[str, Any]:
+        """``result.json``'s content (JSON-ready)."""
+        data: dict[str, Any] = {"schema_version": self.schema_version}
+        for name in ("problem", "kind", "method", "status", "success", "iterations", "cost_initial", "cost",
+                     "gain_pct", "cost_meaning"):
+            data[name] = getattr(self, name)
+        data.update(times=asdict(self.times), tube=None if self.tube is None else asdict(self.tube),
+                    violations=self.violations, environment=asdict(self.environment), settings=self.settings,
+                    details=self.details)
+        return _plain(data)
+
+    def files(self) -> dict[str, bytes]:
+        """The folder's files by name: what :meth:`save` writes and a sweep task returns."""
+        files = {TRAJECTORY_NAME: _npz_bytes({k: np.asarray(v) for k, v in self.trajectory.items()})}
+        if self.gpdm is not None:
+            files[GPDM_NAME] = _gpdm_bytes(self.gpdm)
+        files[RESULT_NAME] = (json.dumps(self.to_json(), indent=2) + "\n").encode()
+        return files  # result.json last: written last, it marks the folder complete
+
+    def save(self, out_dir: str | Path) -> list[Path]:
+        """Write the folder (created if needed); returns the paths, result.json first."""
+        return write_files(self.files(), out_dir)
+
+    @classmethod
+    def from_files(cls, files: Mapping[str, bytes], where: str = "result") -> Result:
+        """Inverse of :meth:`files` (a :class:`ResultFileError` naming what is wrong)."""
+        if RESULT_NAME not in files or TRAJECTORY_NAME not in files:
+            raise ResultFileError(f"{where}: needs {RESULT_NAME} and {TRAJECTORY_NAME}")
+        try:
+            data = json.loads(files[RESULT_NAME])
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ResultFileError(f"{where}: {RESULT_NAME} is not JSON: {exc}") from None
+        version = data.get("schema_version") if isinstance(data, dict) else None
+        if version != SCHEMA_VERSION:
+            raise ResultFileError(f"{where}: {RESULT_NAME} has schema_version {version!r}; this latentoc "
+                                  f"reads {SCHEMA_VERSION} (a result written by another version)")
+        try:
+            with np.load(io.BytesIO(files[TRAJECTORY_NAME]), allow_pickle=False) as f:
+                trajectory = {k: f[k] for k in f.files}
+            gpdm = _gpdm_from_bytes(files[GPDM_NAME]) if GPDM_NAME in files else None
+        except (OSError, ValueError, KeyError) as exc:
+            raise ResultFileError(f"{where}: unreadable arrays: {exc}") from None
+        missing = [k for k in _REQUIRED_ARRAYS if k not in trajectory]
+        if missing:
+            raise ResultFileError(f"{where}: {TRAJECTORY_NAME} lacks {missing}")
+        try:
+            tube = data["tube"]
+            return cls(problem=data["problem"], kind=data["kind"], method=data["method"], status=data["status"],
+                       success=data["success"], iterations=data["iterations"], cost_initial=data["cost_initial"],
+                       cost=data["cost"], gain_pct=data["gain_pct"], cost_meaning=data["cost_meaning"],
+                       times=Times(**data["times"]), tube=None if tube is None else TubeResult(**tube),
+                       violations=data["violations"], environment=Environment(**data["environment"]),
+                       settings=data["settings"], details=data["details"], trajectory=trajectory, gpdm=gpdm)
+        except (KeyError, TypeError) as exc:
+            raise ResultFileError(f"{where}: {RESULT_NAME} misses or mistypes a field: {exc}") from None
+
+
+def load_result(out_dir: str | Path) -> Result:
+    """Read a folder written by :meth:`Result.save` (a :class:`ResultFileError` if it cannot)."""
+    out = Path(out_dir)
+    if not (out / RESULT_NAME).is_file():
+        raise ResultFileError(f"{out}: no {RESULT_NAME} (not a result folder, or a solve that did not finish)")
+    names = [n for n in (RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME) if (out / n).is_file()]
+    return Result.from_files({n: (out / n).read_bytes() for n in names}, str(out))
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready: numpy scalars and arrays as Python numbers and lists."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
     if isinstance(value, np.ndarray):
         return value.tolist()
-    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _npz_bytes(arrays: dict[str, Any]) -> bytes:
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
+def _gpdm_bytes(gpdm: GPDM) -> bytes:
+    with tempfile.TemporaryDirectory() as tmp:
+        gpdm.save(Path(tmp) / GPDM_NAME)
+        return (Path(tmp) / GPDM_NAME).read_bytes()
+
+
+def _gpdm_from_bytes(data: bytes) -> GPDM:
+    with tempfile.TemporaryDirectory() as tmp:
+        (Path(tmp) / GPDM_NAME).write_bytes(data)
+        return GPDM.load(Path(tmp) / GPDM_NAME)
+
+
+_UMASK = os.umask(0)
+os.umask(_UMASK)
 
 
 def atomic_write(path: Path, write: Callable[[Any], None], binary: bool = False) -> None:
@@ -39,6 +297,7 @@ def atomic_write(path: Path, write: Callable[[Any], None], binary: bool = False)
             write(f)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp's files are private; results are not
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -46,26 +305,21 @@ def atomic_write(path: Path, write: Callable[[Any], None], binary: bool = False)
         raise
 
 
-def write_json(path: Path, data: Any) -> None:
-    """Atomically write ``data`` as indented JSON."""
-    atomic_write(Path(path), lambda f: json.dump(data, f, indent=2, default=_json_default, allow_nan=True))
-
-
-def write_solution(solution: Solution, out_dir: str | Path) -> tuple[Path, Path]:
-    """Write ``result.json`` and ``trajectory.npz`` into ``out_dir`` (created if needed)."""
+def write_files(files: Mapping[str, bytes], out_dir: str | Path) -> list[Path]:
+    """Write ``files`` (name -> content) atomically into ``out_dir``, ``result.json`` last; returns
+    the paths, result.json first."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    traj_path, result_path = out / TRAJECTORY_NAME, out / RESULT_NAME
-    arrays = {k: np.asarray(v) for k, v in solution.trajectory.items()}
-    atomic_write(traj_path, lambda f: np.savez(f, **arrays), binary=True)
-    write_json(result_path, solution.result)
-    return result_path, traj_path
+    names = sorted(files, key=lambda n: (n == RESULT_NAME, n != TRAJECTORY_NAME))
+    for name in names:
+        _write_bytes(out / name, files[name])
+    return [out / n for n in sorted(files, key=lambda n: (n != RESULT_NAME, n != TRAJECTORY_NAME))]
 
 
-def read_solution(out_dir: str | Path) -> Solution:
-    """Read a folder written by :func:`write_solution`."""
-    out = Path(out_dir)
-    result = json.loads((out / RESULT_NAME).read_text())
-    with np.load(out / TRAJECTORY_NAME, allow_pickle=False) as f:
-        trajectory = {k: f[k] for k in f.files}
-    return Solution(result=result, trajectory=trajectory)
+def _write_bytes(path: Path, data: bytes) -> None:
+    atomic_write(path, lambda f: f.write(data), binary=True)
+
+
+def write_json(path: Path, data: Any) -> None:
+    """Atomically write ``data`` as indented JSON."""
+    atomic_write(Path(path), lambda f: json.dump(_plain(data), f, indent=2, allow_nan=True))

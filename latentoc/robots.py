@@ -15,14 +15,13 @@ from typing import Callable
 
 import pinocchio
 
+from .errors import LatentocError
+
 __all__ = ["load_robot", "robot_names", "example_robot_data_dir", "UnknownRobotError"]
 
 
-class UnknownRobotError(KeyError):
+class UnknownRobotError(LatentocError, LookupError):
     """A robot name latentoc does not know."""
-
-    def __str__(self) -> str:  # KeyError quotes its message; show it plainly
-        return str(self.args[0])
 
 
 @dataclass(frozen=True)

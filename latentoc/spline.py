@@ -13,10 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import BSpline as _ScipyBSpline
 
+from .errors import LatentocError
+
 __all__ = ["BSpline", "SplineInputError"]
 
 
-class SplineInputError(ValueError):
+class SplineInputError(LatentocError, ValueError):
     """Spline settings or data that cannot be used."""
 
 

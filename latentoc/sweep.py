@@ -1,112 +1,237 @@
-"""Tube and joint-range sweeps: the paper's Table 2 (and Table 4 with d = 2).
+"""Tube and joint-range sweeps (the paper's Tables 2, 4, 6), serial or on an executor (Dask).
 
-:func:`sweep` solves the problem for each tube (latent) and, optionally, each joint
-range of the full-space baseline, reusing one learned GPDM; :func:`format_table`
-prints the rows like Table 2 (tube, cost, gain %, time | range, cost, gain %, time).
+A sweep is a list of :class:`SweepTask`: a latent solve per tube, then, for the arm, a
+full-space baseline solve per joint range. Each task carries its problem as data
+(:meth:`~latentoc.problem.Problem.to_dict`) and :func:`run_task` returns the content of its result
+files (:meth:`~latentoc.results.Result.files`), so a worker needs only the installed package.
 
-Warm start (``warm_start=True``, default): a smaller tube's optimum is feasible for a larger
-one, so each tube starts from the Solution of the largest smaller tube solved before it (in the
-given order), instead of the training fit (:func:`latentoc.solve.solve`'s ``warm_start``).
+* Serial (``executor=None``): the tasks run in this process, in order; with ``warm_start`` each
+  tube starts from the result of the largest smaller tube solved before it (a smaller tube's
+  optimum is feasible for a larger one).
+* On an executor (a ``dask.distributed.Client`` or any ``concurrent.futures.Executor``): the
+  tasks run at once and start cold, from the training fit: a warm start needs the previous
+  tube's optimum, which makes a sweep serial. A failed task is reported with its tube and error
+  (:class:`SweepFailure`); the others still finish and are written.
+
+With ``out``, each task's folder ``out/<label>/`` is written as its result arrives, and
+``resume=True`` skips the tasks whose folder is complete (it has a ``result.json``).
 """
 
 from __future__ import annotations
 
+import traceback
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
 
-from .problem import Problem
-from .results import atomic_write, write_json
-from .solve import problem_gpdm, resolve_tube, solve
+from .api import solve
+from .errors import LatentocError, SweepError
+from .problem import Problem, parse_tube
+from .results import Result, atomic_write, load_result, write_files, write_json
+from .solve import tube_delta
 
-__all__ = ["sweep", "format_table", "write_sweep"]
-
-_FIELDS = ("method", "tube_spec", "tube", "tube_relative", "joint_range_deg", "latent_dim", "status", "success",
-           "iterations", "cost_initial", "cost", "performance_gain_pct", "solve_time_s", "build_time_s",
-           "max_tube_violation", "quadrature_error", "warm_start")
-# the 1 kHz verification of contact problems (latentoc.jump.verify), kept when a result has them
-_CHECKS = ("max_dynamics_residual", "max_flight_residual", "min_normal_force", "max_friction_ratio", "cop_margin",
-           "cop_margin_loaded", "zmp_margin", "com_margin", "max_torque_violation", "max_point_cone_violation",
-           "max_sigma2", "toe_displacement", "toe_slip", "eq33_feet_distance")
+__all__ = ["SweepTask", "SweepFailure", "SweepResult", "sweep", "sweep_tasks", "run_task", "format_table",
+           "write_sweep", "summary_row"]
 
 
-# the other start of a tube solved from two (the broad jump's sweep_starts), kept when present
-_STARTS = ("other_start",)
+@dataclass(frozen=True)
+class SweepTask:
+    """One solve of a sweep: the problem as data, and a tube (latent) or a joint range (baseline)."""
+
+    problem: dict[str, Any]
+    method: str = "latent"
+    tube: float | str | None = None
+    joint_range_deg: float | None = None
+
+    @property
+    def label(self) -> str:
+        """The task's folder name: ``tube-5x``, ``tube-0.02``, ``joint-range-10``."""
+        if self.method == "latent":
+            return f"tube-{self.tube}"
+        return f"joint-range-{self.joint_range_deg:g}"
 
 
-def _row(r: dict[str, Any]) -> dict[str, Any]:
-    return {**{k: r.get(k) for k in _FIELDS}, **{k: r[k] for k in _CHECKS + _STARTS if k in r}}
+@dataclass(frozen=True)
+class SweepFailure:
+    """A task that raised: its label, the error type, message and traceback."""
+
+    label: str
+    error: str
+    message: str
+    traceback: str = ""
+    input_error: bool = False  # a LatentocError (bad input), not a bug
 
 
-def _print_now(line: str) -> None:
-    print(line, flush=True)
+@dataclass
+class SweepResult:
+    """The results in task order (the failed tasks left out) and the failures."""
+
+    results: list[Result] = field(default_factory=list)
+    failures: list[SweepFailure] = field(default_factory=list)
 
 
-def sweep(problem: Problem, tubes: Sequence[float | str], baseline_ranges: Sequence[float] | None = None,
-          latent_dim: int | None = None, hessian: str | None = None,
-          progress: Callable[[str], None] | None = _print_now, warm_start: bool = True) -> list[dict[str, Any]]:
-    """One row per solve (latent for each tube, then joint-range for each range); see the
-    module doc for ``warm_start``."""
-    rows: list[dict[str, Any]] = []
-    gp = problem_gpdm(problem, latent_dim)[0] if tubes else None
-    total = len(tubes) + len(baseline_ranges or [])
-    solved: list[tuple[float, Any]] = []  # (delta, Solution) of the successful latent solves
-    for i, tube in enumerate(tubes):
-        previous = None
-        if warm_start and solved:
-            delta = resolve_tube(tube, gp.tube_size())
-            smaller = [s for s in solved if s[0] <= delta]
-            previous = max(smaller, key=lambda s: s[0])[1] if smaller else None
-        sol = solve(problem, tube=tube, latent_dim=latent_dim, gpdm=gp, hessian=hessian, warm_start=previous)
-        r = sol.result
-        if warm_start and r["success"] and sol.warm:
-            solved.append((r["tube"], sol))
-        rows.append(_row(r))
-        if progress:
-            progress(f"[{i + 1}/{total}] tube {tube}: delta {r['tube']:.4g}, cost {r['cost']:.2f}, "
-                     f"gain {r['performance_gain_pct']:.2f}%, {r['solve_time_s']:.2f} s, {r['status']}")
-    for j, k in enumerate(baseline_ranges or []):
-        r = solve(problem, method="joint-range", joint_range_deg=float(k), hessian=hessian).result
-        rows.append(_row(r))
-        if progress:
-            progress(f"[{len(tubes) + j + 1}/{total}] joint range +-{k} deg: cost {r['cost']:.2f}, "
-                     f"gain {r['performance_gain_pct']:.2f}%, {r['solve_time_s']:.2f} s, {r['status']}")
-    return rows
+def sweep_tasks(problem: Problem, tubes: Sequence[float | str],
+                baseline_ranges: Sequence[float] = ()) -> list[SweepTask]:
+    """The tasks of a sweep: a latent solve per tube, then a joint-range solve per range."""
+    for t in tubes:
+        parse_tube(t)
+    if any(not k > 0 for k in baseline_ranges):
+        raise SweepError(f"joint ranges must be positive degrees, got {list(baseline_ranges)}")
+    data = problem.to_dict()
+    return ([SweepTask(data, "latent", tube=t) for t in tubes]
+            + [SweepTask(data, "joint-range", joint_range_deg=float(k)) for k in baseline_ranges])
 
 
-def format_table(rows: list[dict[str, Any]]) -> str:
+def run_task(task: SweepTask) -> dict[str, bytes]:
+    """Solve one task (in any process: the problem comes as data); its result files' content."""
+    problem = Problem.from_dict(task.problem)
+    if task.method == "latent":
+        problem = problem.replace(tube=task.tube)
+    return solve(problem, method=task.method, joint_range_deg=task.joint_range_deg).files()
+
+
+def _line(i: int, n: int, task: SweepTask, r: Result) -> str:
+    what = f"tube {task.tube}: delta {r.tube.delta:.4g}" if r.tube is not None else \
+        f"joint range +-{task.joint_range_deg:g} deg"
+    return (f"[{i}/{n}] {what}, cost {r.cost:.2f}, gain {r.gain_pct:.2f}%, {r.times.solve_s:.2f} s, {r.status}")
+
+
+def sweep(problem: Problem, tubes: Sequence[float | str] | None = None, executor: Executor | Any | None = None, *,
+          baseline_ranges: Sequence[float] = (), out: str | Path | None = None, resume: bool = False,
+          warm_start: bool = True, progress: Callable[[str], None] | None = print) -> SweepResult:
+    """Solve ``problem`` at each tube (default: its ``sweep_tubes``) and each baseline joint range
+    (module doc): serially, or on ``executor`` (a Dask Client or a concurrent.futures Executor)."""
+    tasks = sweep_tasks(problem, problem.sweep_tubes if tubes is None else tubes, baseline_ranges)
+    if resume and out is None:
+        raise SweepError("resume needs the output folder the earlier run wrote")
+    done: dict[str, Result] = {}
+    if resume and out is not None:
+        done = {t.label: load_result(Path(out) / t.label) for t in tasks
+                if (Path(out) / t.label / "result.json").is_file()}
+    todo = [t for t in tasks if t.label not in done]
+    say = progress or (lambda line: None)
+    if executor is None:
+        outcome = _serial(problem, todo, out, warm_start, say, len(tasks), len(done))
+    else:
+        outcome = _distributed(executor, todo, out, say, len(tasks), len(done))
+    by_label = {**done, **outcome}
+    failures = [f for f in outcome.values() if isinstance(f, SweepFailure)]
+    results = [r for t in tasks if isinstance(r := by_label.get(t.label), Result)]
+    return SweepResult(results=results, failures=failures)
+
+
+def _write(out: str | Path | None, label: str, files: dict[str, bytes]) -> None:
+    if out is not None:
+        write_files(files, Path(out) / label)
+
+
+def _serial(problem: Problem, tasks: list[SweepTask], out: str | Path | None, warm_start: bool,
+            say: Callable[[str], None], total: int, skipped: int) -> dict[str, Any]:
+    outcome: dict[str, Any] = {}
+    solved: list[tuple[float, Result]] = []  # (delta, result) of the successful latent solves
+    for i, task in enumerate(tasks):
+        try:
+            p = problem
+            previous = None
+            if task.method == "latent":
+                p = problem.replace(tube=task.tube)
+                if warm_start and solved:
+                    delta = tube_delta(p, task.tube)  # type: ignore[arg-type]
+                    smaller = [s for s in solved if s[0] <= delta]
+                    previous = max(smaller, key=lambda s: s[0])[1] if smaller else None
+            r = solve(p, method=task.method, joint_range_deg=task.joint_range_deg, warm_start=previous)
+        except LatentocError as exc:
+            outcome[task.label] = SweepFailure(task.label, type(exc).__name__, str(exc), input_error=True)
+            say(f"[{skipped + i + 1}/{total}] {task.label}: failed: {exc}")
+            continue
+        if warm_start and r.success and r.warm and r.tube is not None:
+            solved.append((r.tube.delta, r))
+        _write(out, task.label, r.files())
+        outcome[task.label] = r
+        say(_line(skipped + i + 1, total, task, r))
+    return outcome
+
+
+def _distributed(executor: Any, tasks: list[SweepTask], out: str | Path | None, say: Callable[[str], None],
+                 total: int, skipped: int) -> dict[str, Any]:
+    futures = {executor.submit(run_task, t): t for t in tasks}
+    outcome: dict[str, Any] = {}
+    for k, future in enumerate(_as_completed(executor, list(futures))):
+        task = futures[future]
+        exc = future.exception()
+        if exc is not None:
+            tb = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+            outcome[task.label] = SweepFailure(task.label, type(exc).__name__, str(exc), tb,
+                                               isinstance(exc, LatentocError))
+            say(f"[{skipped + k + 1}/{total}] {task.label}: failed: {type(exc).__name__}: {exc}")
+            continue
+        files = future.result()
+        _write(out, task.label, files)
+        r = Result.from_files(files, task.label)
+        outcome[task.label] = r
+        say(_line(skipped + k + 1, total, task, r))
+    return outcome
+
+
+def _as_completed(executor: Any, futures: list[Any]) -> Any:
+    """Futures as they finish: Dask's own iterator for a Dask client, else concurrent.futures'."""
+    if type(executor).__module__.startswith("distributed"):
+        from distributed import as_completed
+        return as_completed(futures)
+    from concurrent.futures import as_completed as cf_as_completed
+    return cf_as_completed(futures)
+
+
+# ------------------------------------------------------------------ tables and files
+def summary_row(r: Result) -> dict[str, Any]:
+    """A result's line in sweep.json: the core fields and the tube or joint range."""
+    return {"problem": r.problem, "method": r.method, "status": r.status, "success": r.success,
+            "iterations": r.iterations, "cost_initial": r.cost_initial, "cost": r.cost, "gain_pct": r.gain_pct,
+            "tube_spec": None if r.tube is None else r.tube.spec, "tube": None if r.tube is None else r.tube.delta,
+            "tube_relative": None if r.tube is None else r.tube.relative,
+            "joint_range_deg": r.details.get("joint_range_deg"), "solve_s": r.times.solve_s,
+            "warm_start": r.details.get("warm_start", False), "violations": r.violations}
+
+
+def format_table(results: Sequence[Result]) -> str:
     """Markdown table in the layout of Table 2: latent rows left, joint-range rows right."""
-    lat = [r for r in rows if r["method"] == "latent"]
-    jr = [r for r in rows if r["method"] == "joint-range"]
+    lat = [r for r in results if r.method == "latent"]
+    jr = [r for r in results if r.method == "joint-range"]
     head = ("| tube | delta | delta/noise | cost | gain % | time s | status "
             "| joint range | cost | gain % | time s | status |")
     lines = [head, "|" + "---|" * 12]
     for i in range(max(len(lat), len(jr))):
-        left = ["", "", "", "", "", "", ""]
-        right = ["", "", "", "", ""]
-        if i < len(lat):
+        left = [""] * 7
+        right = [""] * 5
+        tube = lat[i].tube if i < len(lat) else None
+        if tube is not None:
             r = lat[i]
-            left = [str(r["tube_spec"]), f"{r['tube']:.4g}", f"{r['tube_relative']:.3g}", f"{r['cost']:.2f}",
-                    f"{r['performance_gain_pct']:.2f}", f"{r['solve_time_s']:.2f}", _ok(r)]
+            left = [str(tube.spec), f"{tube.delta:.4g}", f"{tube.relative:.3g}", f"{r.cost:.2f}",
+                    f"{r.gain_pct:.2f}", f"{r.times.solve_s:.2f}", _ok(r)]
         if i < len(jr):
             r = jr[i]
-            right = [f"+-{r['joint_range_deg']:g} deg", f"{r['cost']:.2f}", f"{r['performance_gain_pct']:.2f}",
-                     f"{r['solve_time_s']:.2f}", _ok(r)]
+            right = [f"+-{r.details['joint_range_deg']:g} deg", f"{r.cost:.2f}", f"{r.gain_pct:.2f}",
+                     f"{r.times.solve_s:.2f}", _ok(r)]
         lines.append("| " + " | ".join(left + right) + " |")
     if lat:
-        lines.append(f"\nlatent: d = {lat[0]['latent_dim']}, initial cost {lat[0]['cost_initial']:.2f}")
+        lines.append(f"\nlatent: d = {lat[0].settings['latent_dim']}, initial cost {lat[0].cost_initial:.2f}")
     if jr:
-        lines.append(f"joint range: initial cost {jr[0]['cost_initial']:.2f}")
+        lines.append(f"joint range: initial cost {jr[0].cost_initial:.2f}")
     return "\n".join(lines)
 
 
-def _ok(r: dict) -> str:
-    return "ok" if r["success"] else str(r["status"])
+def _ok(r: Result) -> str:
+    return "ok" if r.success else r.status
 
 
-def write_sweep(rows: list[dict[str, Any]], out_dir: str | Path, meta: dict | None = None) -> tuple[Path, Path]:
-    """Atomically write ``sweep.json`` (rows + meta) and ``sweep.md`` (the table)."""
+def write_sweep(outcome: SweepResult, out_dir: str | Path, meta: dict[str, Any] | None = None) -> tuple[Path, Path]:
+    """Atomically write ``sweep.json`` (meta, a summary row per result, the failures) and
+    ``sweep.md`` (the table) beside the tasks' folders."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "sweep.json", {"meta": meta or {}, "rows": rows})
-    atomic_write(out / "sweep.md", lambda f: f.write(format_table(rows) + "\n"))
+    write_json(out / "sweep.json", {"meta": meta or {}, "rows": [summary_row(r) for r in outcome.results],
+                                    "failures": [vars(f) for f in outcome.failures]})
+    atomic_write(out / "sweep.md", lambda f: f.write(format_table(outcome.results) + "\n"))
     return out / "sweep.json", out / "sweep.md"

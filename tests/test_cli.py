@@ -1,4 +1,5 @@
-"""`python -m latentoc`: list, solve (files + summary), clear errors with exit 2 and no files."""
+"""`python -m latentoc`: list, show, solve (files + summary); input errors exit 2 with a message and no
+files, bugs exit 1 with their traceback."""
 
 import json
 import subprocess
@@ -8,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from latentoc.cli import main
+from latentoc.cli import main, summary
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -19,15 +20,28 @@ def test_list(capsys):
     assert "arm-raise " in out and "arm-raise-small" in out
 
 
+def test_list_verbose_and_show_print_the_resolved_settings(capsys):
+    from latentoc.problem import describe_problem, load_problem
+
+    assert main(["show", "broad-jump"]) == 0
+    assert capsys.readouterr().out == describe_problem(load_problem("broad-jump")) + "\n"
+    assert main(["list", "--verbose"]) == 0
+    out = capsys.readouterr().out
+    assert "options.friction = 0.4" in out and 'latent.tube = "5x"' in out
+    assert main(["show", "no-such"]) == 2 and "unknown problem" in capsys.readouterr().err
+
+
+@pytest.mark.slow
 def test_solve_writes_files_and_summary(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["solve", "arm-raise-small", "--quiet", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "Solve_Succeeded" in text and "gain" in text and "result.json" in text
     r = json.loads((out / "result.json").read_text())
-    assert r["success"] and r["problem"] == "arm-raise-small"
+    assert r["success"] and r["problem"] == "arm-raise-small" and r["schema_version"] == 1
     with np.load(out / "trajectory.npz") as f:
         assert {"t", "q", "v", "a", "tau", "x", "P", "model"} <= set(f.files)
+    assert sorted(p.name for p in out.iterdir()) == ["gpdm.npz", "result.json", "trajectory.npz"]
 
 
 @pytest.mark.parametrize("args, match", [
@@ -35,7 +49,8 @@ def test_solve_writes_files_and_summary(tmp_path, capsys):
     (["solve", "arm-raise-small", "--tube", "-1"], "must be positive"),
     (["solve", "arm-raise-small", "--tube", "1e-12"], "infeasible"),
     (["solve", "arm-raise-small", "--latent-dim", "9"], "latent dimension"),
-    (["solve", "arm-raise-small", "--control-points", "2"], "control points"),
+    (["solve", "arm-raise-small", "--control-points", "2"], "control_points"),
+    (["solve", "arm-raise-small", "--hessian", "lbfgs", "--tube", "abc"], "neither a number"),
     (["sweep", "arm-raise-small", "--tubes", "0x"], "must be positive"),
     (["bench", "nothing"], "unknown benchmark"),
 ])
@@ -54,6 +69,20 @@ def test_module_entry_point_subprocess(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_bug_exits_1_with_its_traceback(tmp_path):
+    """An exception that is not a LatentocError is a bug: its traceback, exit code 1."""
+    out = tmp_path / "o"
+    code = ("import sys\nimport latentoc.min_torque_problem\nfrom latentoc.solve import SOLVERS\n"
+            "def broken(problem, **kw):\n    return 1 / 0\n"
+            "SOLVERS['latent-min-torque'] = broken\n"
+            f"from latentoc.cli import main\nsys.exit(main(['solve', 'arm-raise-small', '--quiet', '--out', {str(out)!r}]))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert not out.exists()
+    assert p.returncode == 1 and "Traceback" in p.stderr and "ZeroDivisionError" in p.stderr
+    assert "latentoc: error" not in p.stderr
+
+
+@pytest.mark.slow
 def test_unconverged_solve_exits_1_and_writes_only_with_keep_failed(tmp_path, capsys):
     src = (REPO / "problems" / "arm-raise-small.toml").read_text()
     f = tmp_path / "short.toml"
@@ -62,10 +91,11 @@ def test_unconverged_solve_exits_1_and_writes_only_with_keep_failed(tmp_path, ca
     assert main(["solve", str(f), "--quiet", "--out", str(out)]) == 1
     assert "Maximum_Iterations_Exceeded" in capsys.readouterr().out and not out.exists()
     assert main(["solve", str(f), "--quiet", "--keep-failed", "--out", str(out)]) == 1
-    assert sorted(p.name for p in out.iterdir()) == ["result.json", "trajectory.npz"]
+    assert sorted(p.name for p in out.iterdir()) == ["gpdm.npz", "result.json", "trajectory.npz"]
     assert json.loads((out / "result.json").read_text())["success"] is False
 
 
+@pytest.mark.slow
 def test_solve_plots_writes_png_figures_of_the_solution(tmp_path, capsys):
     from PIL import Image
 
@@ -82,11 +112,10 @@ def test_solve_plots_writes_png_figures_of_the_solution(tmp_path, capsys):
     assert "plots: " in capsys.readouterr().out
 
 
-def test_solve_summary_reports_the_contact_checks(monkeypatch, capsys):
+def test_solve_summary_reports_the_contact_checks():
     """For a contact problem the summary prints the exported motion's 1 kHz checks, as the
-    result (here verify's numbers for a static stance, numeric Pinocchio) holds them."""
-    import latentoc.solve
-    from latentoc.solve import Solution
+    result's details (here verify's numbers for a static stance, numeric Pinocchio) hold them."""
+    from result_factory import make_result
     from test_jump_verify import _static_arrays
 
     from latentoc.jump.verify import verify
@@ -94,13 +123,9 @@ def test_solve_summary_reports_the_contact_checks(monkeypatch, capsys):
     model, arrays = _static_arrays()
     arrays["loaded"] = np.ones((len(arrays["t"]), 3), dtype=int)
     checks = verify(model, arrays)
-    result = {"problem": "broad-jump", "method": "latent", "status": "Maximum_Iterations_Exceeded", "iterations": 3,
-              "success": False, "cost_initial": 0.73, "cost": 0.5, "performance_gain_pct": -31.5, "tube": 0.02,
-              "tube_spec": 0.02, "tube_relative": 300.0, "max_tube_violation": 0.0, "gpdm_time_s": 1.0,
-              "build_time_s": 2.0, "solve_time_s": 3.0, "quadrature_error": 0.0, "friction": 0.4, **checks}
-    monkeypatch.setattr(latentoc.solve, "solve", lambda problem, **kw: Solution(result=result))
-    assert main(["solve", "broad-jump", "--quiet"]) == 1  # not converged: nothing written
-    text = capsys.readouterr().out
+    r = make_result(tube=0.02, success=False, friction=0.4, **checks)
+    text = summary(r)
+    assert text.splitlines()[0] == "test (latent): Maximum_Iterations_Exceeded after 7 iterations"
     assert f"min normal force {checks['min_normal_force']:.1f} N" in text
     assert f"friction ratio {checks['max_friction_ratio']:.3f} (mu 0.4)" in text
     assert f"centre-of-pressure margin {checks['cop_margin_loaded']:.3f} m" in text

@@ -68,7 +68,7 @@ def _close(got, want, rtol=RTOL):
 def case(gpdm):
     """Layer outputs and CasADi's at the same points and multipliers."""
     layer = GPLayer(gpdm)
-    K, D, d = 7, gpdm.output_dim, gpdm.latent_dim
+    K, D = 7, gpdm.output_dim
     Z = _points(gpdm, K, seed=3)
     rng = np.random.default_rng(4)
     mu, lam = rng.standard_normal((K, 3 * D)), rng.standard_normal(K)

@@ -12,9 +12,9 @@ import pytest
 from latentoc.dynamics import SymbolicModel
 from latentoc.kinds.min_torque import MinTorqueSettings, ipopt_options, joint_range_nlp, latent_nlp, sampled_motion
 from latentoc.latent import GPLayer, IdentityLayer
-from latentoc.problem import TRAINING_MOTIONS, load_problem, training_motion
+from latentoc.min_torque_problem import TRAINING_MOTIONS, problem_gpdm, training_motion
+from latentoc.problem import load_problem
 from latentoc.robots import load_robot
-from latentoc.solve import problem_gpdm
 from latentoc.spline_path import SplinePath, constraint_times, gauss_legendre_nodes, trapezoid_cost
 
 SETTINGS = MinTorqueSettings(duration=2.9, control_points=7, quadrature_points=4, constraint_points=6)

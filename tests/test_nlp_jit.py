@@ -40,7 +40,7 @@ def test_ipopt_loads_its_blas_on_one_thread():
     process), leaves $OPENBLAS_NUM_THREADS unset, and a value the user sets is obeyed."""
     if not os.path.isdir("/proc/self/task"):
         pytest.skip("needs /proc to count threads")
-    code = ("import os, numpy, casadi\n"
+    code = ("import os, numpy, casadi, latentoc\n"
             "n = len(os.listdir('/proc/self/task'))\n"
             "from latentoc.nlp.ipopt import load_ipopt\n"
             "load_ipopt()\n"

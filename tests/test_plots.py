@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pinocchio as pin
 import pytest
 from PIL import Image
+from result_factory import make_result
 
 from latentoc import plots
 from latentoc.gpdm import GPDMSettings, learn_gpdm
@@ -91,14 +90,14 @@ def test_contact_forces_zmp_gain(tmp_path):
     zmp = np.column_stack([0.1 + 0.05 * t, 0.02 * np.sin(9 * t)])
     com = np.column_stack([0.12 + 0.02 * t, 0.01 * t, np.full(50, 0.9)])
     check_png(plots.plot_zmp_com(zmp, com, poly, tmp_path / "zmp.png"), "zmp_com")
-    rows = [{"tube": d, "performance_gain_pct": g} for d, g in [(1e-5, 19.0), (1e-4, 31.0), (1e-6, 3.0)]]
-    check_png(plots.plot_gain_vs_tube(rows, tmp_path / "gain.png",
+    results = [make_result(tube=d, gain=g) for d, g in [(1e-5, 19.0), (1e-4, 31.0), (1e-6, 3.0)]]
+    check_png(plots.plot_gain_vs_tube(results, tmp_path / "gain.png",
                                       reference=[(1e-6, 2.87), (1e-4, 31.3)]), "gain_vs_tube")
-    rows += [{"method": "joint-range", "tube": None, "joint_range_deg": k, "performance_gain_pct": g,
-              "success": k < 40} for k, g in [(5, 5.3), (20, 23.5), (45, 38.5)]]
-    check_png(plots.plot_gain_vs_tube(rows, tmp_path / "gain2.png"), "gain_vs_tube")
-    with pytest.raises(ValueError, match="no row"):
-        plots.plot_gain_vs_tube([{"cost": 1.0}], tmp_path / "gain3.png")
+    results += [make_result(tube=None, method="joint-range", gain=g, success=k < 40, joint_range_deg=k)
+                for k, g in [(5, 5.3), (20, 23.5), (45, 38.5)]]
+    check_png(plots.plot_gain_vs_tube(results, tmp_path / "gain2.png"), "gain_vs_tube")
+    with pytest.raises(ValueError, match="no result"):
+        plots.plot_gain_vs_tube([], tmp_path / "gain3.png")
 
 
 def test_plot_start_poses(arm, tmp_path):
@@ -150,58 +149,28 @@ def test_plot_stick_frames(arm, tmp_path, layout):
     assert len(plots.frame_indices(len(Q), 8)) == 8
 
 
-def write_solution(out, model, t, q, gpdm=None, **extra):
-    out.mkdir(parents=True, exist_ok=True)
-    tau = np.sin(np.outer(t, np.arange(1, model.nv + 1)))
-    arrays = {"t": t, "q": q, "tau": tau, "q_initial": q[::-1].copy(), "tau_initial": 0.5 * tau,
-              "model": np.str_(model.saveToString()), **extra}
-    np.savez(out / "trajectory.npz", **arrays)
-    (out / "result.json").write_text(json.dumps({"problem": "test", "tube": 2.0 * gpdm.tube_size()
-                                                 if gpdm is not None else 1.0}))
-    if gpdm is not None:
-        gpdm.save(out / "gpdm.npz")
-
-
 def test_plot_solution_arm(arm, gpdm3, tmp_path):
+    """An arm result (latent path, training fit, its GPDM): angles, torques (the training fit's by
+    numeric RNEA), stick frames and the latent tube."""
     model, t, Q = arm
     X = gpdm3.latent_trajectories()[0]
-    write_solution(tmp_path, model, t[::6], Q[::6], gpdm3, x=X, x_initial=X[::-1].copy(),
-                   P=X[::10], tau_min=-np.ones(7), tau_max=np.ones(7))
+    t, Q = t[::6], Q[::6]
+    n = len(t)
+    traj = {"q": Q, "tau": np.sin(np.outer(t, np.arange(1, 8))), "q_initial": Q[::-1].copy(), "x": X,
+            "x_initial": X[::-1].copy(), "P": X[::10], "P_initial": X[::10] + 0.01}
+    make_result(model, n, tube=2.0 * gpdm3.tube_size(), trajectory=traj, gpdm=gpdm3).save(tmp_path)
     paths = plots.plot_solution(tmp_path)
-    names = {p.name for p in paths}
-    assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "latent_tube.png"}
+    assert {p.name for p in paths} == {"joint_angles.png", "torques.png", "stick_frames.png", "latent_tube.png"}
+    assert all(p.parent == tmp_path / "plots" for p in paths)
     figure = {"joint_angles": "joint_curves", "torques": "torques", "stick_frames": "stick_frames",
               "latent_tube": "latent_tube"}
     for p in paths:
         check_png(p, figure[p.stem], rows=2)  # rows: initial and optimised stick frames
 
 
-def test_plot_solution_contacts(tmp_path):
-    model = pin.Model()
-    j = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
-    k = model.addJoint(j, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0, 0, -0.5])), "knee")
-    model.appendBodyToJoint(k, pin.Inertia.Random(), pin.SE3.Identity())
-    model.addFrame(pin.Frame("foot_end", k, pin.SE3(np.eye(3), np.array([0, 0, -0.5])),
-                             pin.FrameType.OP_FRAME))
-    t = np.linspace(0, 1, 40)
-    q = np.tile(pin.neutral(model), (40, 1))
-    q[:, 0], q[:, 2], q[:, 7] = t, 1.0, 0.3 * np.sin(3 * t)
-    F = np.zeros((40, 1, 3))
-    F[:, 0, 2] = 600.0
-    poly = np.array([[0, -0.1], [0.2, -0.1], [0.2, 0.1], [0, 0.1]])
-    write_solution(tmp_path, model, t, q, contact_forces=F, contact_frames=np.array(["foot_end"]),
-                   zmp=np.column_stack([0.1 + 0 * t, 0 * t]), com=np.column_stack([0.1 + 0 * t, 0 * t, 0.8 + 0 * t]),
-                   support_polygon=poly)
-    names = {p.name for p in plots.plot_solution(tmp_path, gif=True)}
-    assert names == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png",
-                     "zmp_com.png", "motion.gif"}
-    with Image.open(tmp_path / "plots" / "motion.gif") as im:
-        assert im.n_frames == 15 + 1  # 1 s at 15 fps, both ends
-
-
 def test_plot_solution_jump_format(tmp_path):
-    """A broad-jump trajectory (actuated tau, one wrench per foot, touchdown, heel offset):
-    contact forces and landing balance are derived; a static pose has its ZMP at the COM."""
+    """A broad-jump result (actuated tau, one wrench per foot, touchdown, heel offset): contact
+    forces and landing balance are derived; a static pose has its ZMP at the COM."""
     from latentoc.human_models import broad_jump_training_motion, build_cmu_humanoid
 
     model = build_cmu_humanoid()
@@ -210,18 +179,19 @@ def test_plot_solution_jump_format(tmp_path):
     n = len(t)
     wrench = np.zeros((n, 6))
     wrench[:, 2] = 300.0
-    traj = {"t": t, "q": Q, "v": np.zeros((n, model.nv)), "a": np.zeros((n, model.nv)),
-            "tau": np.zeros((n, model.nv - 6)), "wrench": wrench, "contact": np.ones(n, np.int8),
-            "contact_frames": np.array(["ltoes_end", "rtoes_end"]), "touchdown": np.float64(t[n // 2]),
-            "heel_offset": np.array([-0.05, 0.0, 0.0]), "tau_min": -np.ones(model.nv - 6),
-            "tau_max": np.ones(model.nv - 6), "model": np.str_(model.saveToString()),
+    traj = {"t": t, "q": Q, "tau": np.zeros((n, model.nv - 6)), "wrench": wrench, "contact": np.ones(n, np.int8),
+            "touchdown": np.float64(t[n // 2]), "heel_offset": np.array([-0.05, 0.0, 0.0]),
+            "tau_min": -np.ones(model.nv - 6), "tau_max": np.ones(model.nv - 6),
             "q_initial": Qj}  # the training jump at its own frame rate: stick frames only
-    np.savez(tmp_path / "trajectory.npz", **traj)
-    (tmp_path / "result.json").write_text(json.dumps({"problem": "broad-jump", "kind": "broad-jump"}))
-    paths = {p.name: p for p in plots.plot_solution(tmp_path)}
-    assert set(paths) == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png", "zmp_com.png"}
+    make_result(model, n, tube=None, trajectory=traj).save(tmp_path)
+    paths = {p.name: p for p in plots.plot_solution(tmp_path, gif=True)}
+    assert set(paths) == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png", "zmp_com.png",
+                          "motion.gif"}
     check_png(paths["stick_frames.png"], "stick_frames", rows=2)
-    zmp, com, poly, tz = plots._landing_balance(model, traj)
+    with Image.open(paths["motion.gif"]) as im:
+        assert im.n_frames == int(round(15 * (t[-1] - t[0]))) + 1  # 15 fps, both ends
+    full = {**traj, "v": np.zeros((n, model.nv)), "a": np.zeros((n, model.nv))}
+    zmp, com, poly, tz = plots._landing_balance(model, full)
     assert len(zmp) == len(com) == len(tz) == np.sum(t >= t[n // 2])
     assert np.allclose(zmp, com[:, :2], atol=1e-9)  # static: ZMP = ground projection of the COM
     data = model.createData()

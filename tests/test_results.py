@@ -1,4 +1,4 @@
-"""result.json + trajectory.npz: round trip, atomic writes, rebuildable model."""
+"""The result schema: a folder's round trip, atomic files, versioned and checked on reading."""
 
 import json
 import os
@@ -6,33 +6,75 @@ import os
 import numpy as np
 import pinocchio as pin
 import pytest
+from result_factory import make_result
 
-from latentoc.results import RESULT_NAME, TRAJECTORY_NAME, atomic_write, read_solution, write_solution
-from latentoc.robots import load_robot
+from latentoc.errors import LatentocError, ResultFileError
+from latentoc.results import (GPDM_NAME, RESULT_NAME, SCHEMA_VERSION, TRAJECTORY_KEYS, TRAJECTORY_NAME, Result,
+                              atomic_write, load_result)
 from latentoc.solve import Solution
 
 
-def _solution():
-    model = load_robot("human-arm")
-    t = np.linspace(0, 1, 11)
-    q = np.tile(pin.neutral(model), (11, 1))
-    return Solution(result={"problem": "x", "cost": np.float64(1.5), "success": True, "tube": None},
-                    trajectory={"t": t, "q": q, "v": 0 * q, "a": 0 * q, "tau": 0 * q,
-                                "model": np.str_(model.saveToString())})
-
-
 def test_round_trip(tmp_path):
-    sol = _solution()
-    paths = write_solution(sol, tmp_path / "out")
+    r = make_result(joint_range_deg=None, note=np.float64(1.5))
+    paths = r.save(tmp_path / "out")
     assert [p.name for p in paths] == [RESULT_NAME, TRAJECTORY_NAME]
-    back = read_solution(tmp_path / "out")
-    assert back.result == {"problem": "x", "cost": 1.5, "success": True, "tube": None}
+    back = load_result(tmp_path / "out")
+    assert back.to_json() == r.to_json() and back.details["note"] == 1.5
     for k in ("t", "q", "v", "a", "tau"):
-        assert np.array_equal(back.trajectory[k], sol.trajectory[k])
+        assert np.array_equal(back.trajectory[k], r.trajectory[k])
     m = pin.Model()
     m.loadFromString(str(back.trajectory["model"]))
     assert m.nq == 7 and np.isclose(sum(i.mass for i in m.inertias), 8.74)
     assert sorted(os.listdir(tmp_path / "out")) == [RESULT_NAME, TRAJECTORY_NAME]
+
+
+def test_result_json_has_the_core_fields_of_every_kind(tmp_path):
+    make_result().save(tmp_path)
+    data = json.loads((tmp_path / RESULT_NAME).read_text())
+    assert data["schema_version"] == SCHEMA_VERSION
+    assert {"problem", "kind", "method", "status", "success", "iterations", "cost_initial", "cost", "gain_pct",
+            "times", "tube", "violations", "environment", "settings", "details"} <= set(data)
+    assert set(data["environment"]) == {"latentoc", "casadi", "pinocchio", "numpy", "python", "cpu", "cpu_count",
+                                        "threads"}
+    assert data["environment"]["pinocchio"] == pin.__version__
+
+
+def test_gpdm_travels_with_the_result(tmp_path):
+    from latentoc.gpdm import GPDMSettings, learn_gpdm
+
+    rng = np.random.default_rng(0)
+    Y = np.cumsum(rng.standard_normal((20, 4)), axis=0)
+    gp = learn_gpdm(Y, GPDMSettings(latent_dim=2, outer_iterations=1, max_iterations=5))
+    names = [p.name for p in make_result(gpdm=gp).save(tmp_path)]
+    assert names == [RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME]
+    back = load_result(tmp_path).gpdm
+    x = gp.X[:3] + 0.1
+    assert np.array_equal(back.X, gp.X) and np.allclose(back.variance(x), gp.variance(x), rtol=0, atol=0)
+
+
+@pytest.mark.parametrize("damage, match", [
+    (lambda d: (d / RESULT_NAME).unlink(), "no result.json"),
+    (lambda d: (d / TRAJECTORY_NAME).unlink(), "needs result.json and trajectory.npz"),
+    (lambda d: (d / RESULT_NAME).write_text("{"), "not JSON"),
+    (lambda d: (d / RESULT_NAME).write_text(json.dumps({"problem": "old", "cost": 1.0})),
+     "schema_version None; this latentoc reads 1"),
+    (lambda d: (d / RESULT_NAME).write_text(json.dumps({"schema_version": SCHEMA_VERSION})), "misses or mistypes"),
+    (lambda d: (d / TRAJECTORY_NAME).write_bytes(b"garbage"), "unreadable arrays"),
+])
+def test_damaged_folders_are_named_errors(tmp_path, damage, match):
+    make_result().save(tmp_path)
+    damage(tmp_path)
+    with pytest.raises(ResultFileError, match=match) as err:
+        load_result(tmp_path)
+    assert isinstance(err.value, LatentocError)
+
+
+def test_trajectory_keys_are_the_documented_ones():
+    """A kind's trajectory with a key TRAJECTORY_KEYS does not document is a bug, refused."""
+    sol = Solution(result={}, trajectory={"t": np.zeros(2), "q_guess": np.zeros(2)})
+    with pytest.raises(KeyError, match="q_guess"):
+        Result.from_solution(sol, None)
+    assert {"t", "q", "v", "a", "tau", "model", "x", "P", "sigma2", "wrench"} <= set(TRAJECTORY_KEYS)
 
 
 def test_failed_write_leaves_no_file(tmp_path):

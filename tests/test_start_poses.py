@@ -6,7 +6,7 @@ import pytest
 
 from latentoc.problem import load_problem
 from latentoc.robots import load_robot
-from latentoc.solve import problem_gpdm
+from latentoc.min_torque_problem import problem_gpdm
 from latentoc.start_poses import radial_direction, start_pose_distances, tube_boundary_point
 
 

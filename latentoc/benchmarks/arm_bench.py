@@ -18,7 +18,6 @@ follow the load.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -31,10 +30,12 @@ from latentoc.dynamics import SymbolicModel
 from latentoc.kinds.min_torque import MinTorqueSettings, ipopt_options, joint_range_nlp, latent_nlp
 from latentoc.nlp import ipopt
 from latentoc.nlp.jit import threads
-from latentoc.problem import TRAINING_MOTIONS, load_problem, training_motion
+from latentoc.min_torque_problem import TRAINING_MOTIONS, problem_gpdm, training_motion
+from latentoc.problem import load_problem
 from latentoc.progress import set_quiet
 from latentoc.robots import load_robot
-from latentoc.solve import problem_gpdm, resolve_tube
+from latentoc.results import load_result
+from latentoc.solve import resolve_tube
 
 TARGET_FIRST_S, TARGET_5X_S = 10.0, 0.3
 CALLBACKS = (("f", "nlp_f"), ("g", "nlp_g"), ("grad_f", "nlp_grad_f"), ("jac_g", "nlp_jac_g"), ("hess", "nlp_hess_l"))
@@ -51,9 +52,9 @@ def first_solve(problem: str, tube: str) -> dict:
         wall = time.perf_counter() - t0
         if run.returncode != 0:
             raise RuntimeError(f"{' '.join(cmd)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
-        with open(os.path.join(tmp, "out", "result.json")) as f:
-            result = json.load(f)
-    return {"wall": wall, **result}
+        r = load_result(os.path.join(tmp, "out"))
+    return {"wall": wall, "gpdm_time_s": r.times.gpdm_s, "build_time_s": r.times.build_s,
+            "solve_time_s": r.times.solve_s, "iterations": r.iterations, "cost": r.cost, "status": r.status}
 
 
 def warm_solves(nlp, problem, repeat: int) -> dict:

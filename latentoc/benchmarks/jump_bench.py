@@ -16,7 +16,6 @@ cache compiles nothing; a cold solve <= 20 s; function evaluations <= 50 ms per 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import resource
 import subprocess
@@ -24,6 +23,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from latentoc.results import load_result
 
 TARGET_FIRST_S, TARGET_COLD_S, TARGET_EVAL_MS = 180.0, 20.0, 50.0
 CALLBACKS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")
@@ -40,10 +41,10 @@ def first_solve(tube: float, cache: str) -> dict:
         wall = time.perf_counter() - t0
         if run.returncode not in (0, 1):
             raise RuntimeError(f"{' '.join(cmd)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
-        with open(os.path.join(tmp, "out", "result.json")) as f:
-            result = json.load(f)
+        r = load_result(os.path.join(tmp, "out"))
     rss_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    return {"wall": wall, "rss_mb": rss_mb, **result}
+    return {"wall": wall, "rss_mb": rss_mb, "compile_time_s": r.times.compile_s, "status": r.status,
+            "distance": r.cost}
 
 
 def second_gpdm(cache: str) -> int:

@@ -54,6 +54,7 @@ from typing import TYPE_CHECKING, Iterator, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
+from ..errors import LatentocError
 from .objective import KAPPA_SQ, GPDMProblem, neg_log_posterior, optimal_w, pack, unpack
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -63,7 +64,7 @@ __all__ = ["GPDMSettings", "GPDMInputError", "learn_gpdm", "prepare_data",
            "pca_initialization", "roughness"]
 
 
-class GPDMInputError(ValueError):
+class GPDMInputError(LatentocError, ValueError):
     """Invalid training data or settings for GPDM learning."""
 
 

@@ -1,5 +1,8 @@
-"""The ``"broad-jump"`` problem kind: set-up from the training data, settings, solve, result.
+"""The ``"broad-jump"`` problem kind: its problem schema, set-up from the training data, solve, result.
 
+:data:`SCHEMA` declares the keys of a broad-jump problem file: the ``[options]`` table is
+:class:`~.settings.JumpSettings` (its fields, types and defaults; ``mu`` is the file's
+``friction``; :data:`RANGES` adds the ranges) and the set-up's own keys (:data:`SETUP_OPTIONS`).
 :func:`setup` learns the GPDM on the symmetric training jump (37 learned DOF; or every jump of
 the take), estimates the phases, the heel point and the torque limits, and fits the training
 start. :func:`solve_jump_problem` is ``latentoc.solve.SOLVERS["broad-jump"]``.
@@ -7,16 +10,21 @@ start. :func:`solve_jump_problem` is ``latentoc.solve.SOLVERS["broad-jump"]``.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
-from typing import Callable
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..dynamics import SymbolicModel
+from ..errors import ProblemError, SolveError
 from ..gpdm import GPDM, GPDMSettings, learn_gpdm
 from ..latent.gp_layer import GPLayer
 from ..nlp.blocks import RobotBlock, compile_blocks
+from ..problem import TUBE, Problem
+from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
+from ..solve import SOLVERS, Solution, apply_overrides, resolve_tube
 from ..spline import BSpline
 from .contact import FootGeometry, foot_points
 from .export import trajectory
@@ -29,7 +37,7 @@ from .torque_limits import TrainingDynamics, estimate_training_dynamics
 from .training import JumpTraining, jump_model, training_jumps
 
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
-           "settings_from_problem", "OPTIONS"]
+           "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
 
 PATH_SMOOTHING = 1e-3  # weight of int ||x''||^2 dt in the initial latent path fit
 
@@ -122,45 +130,104 @@ def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: fl
 
 
 # ------------------------------------------------------------------ the problem file
-_SETUP_CACHE: dict = {}
-
-#: the ``[options]`` of a broad-jump problem file and the JumpSettings field each sets (None:
-#: read by the set-up or reported, not a setting)
-OPTIONS = {"mass": None, "height": None, "learned_dof": None, "restitution": None, "training_jumps": None,
-           "training_stride": None, "torque_margin": None, "torque_floor": None, "sweep_starts": None,
-           "friction": "mu", "n_stance": "n_stance", "n_flight": "n_flight", "n_land": "n_land",
-           "two_phase": "two_phase", "torque_limits": "torque_limits", "polygon": "polygon",
-           "n_base_stance": "n_base_stance", "n_base_land": "n_base_land", "foot_tolerance": "foot_tolerance",
-           "wrench_spacing": "wrench_spacing"}
 SWEEP_STARTS = ("warm+cold", "warm")  # a tube after a solved smaller one: both starts, or warm only
 
+#: the set-up's own ``[options]`` (not JumpSettings fields): key -> (check, default, doc)
+SETUP_OPTIONS: dict[str, tuple[Check, Any, str]] = {
+    "training_jumps": (choice("one", "all"), "one", '"one" (the paper) or "all" (every jump of take 01_01)'),
+    "training_stride": (integer(1), 1, "the GPDM learns every k-th captured frame (120 Hz)"),
+    "torque_margin": (number(0), 0.1, "torque limits widened by this fraction of each joint's peak |tau|"),
+    "torque_floor": (number(0), 5.0, "... and by at least this many N m"),
+    "sweep_starts": (choice(*SWEEP_STARTS), SWEEP_STARTS[0],
+                     "a tube after a solved smaller one: solved warm and cold (the better kept), or warm"),
+}
+#: JumpSettings fields set by other tables of the file, not by [options]
+_ELSEWHERE = {"tube": "latent.tube", "n_control": "latent.control_points", "hessian": "solver.hessian",
+              "max_iter": "solver.max_iter", "tol": "solver.tol"}
+_TOML_NAMES = {"mu": "friction"}  # JumpSettings field -> its [options] key
+#: ranges of the JumpSettings fields in [options] (lo, hi, lo_open); a field not listed has its type only
+RANGES: dict[str, tuple[float | None, float | None, bool]] = {
+    "mu": (0.0, None, True), "n_stance": (2, None, False), "n_flight": (2, None, False), "n_land": (2, None, False),
+    "n_base_stance": (4, None, False), "n_base_land": (4, None, False), "foot_tolerance": (0.0, None, False),
+    "ball_tolerance": (0.0, None, False), "contact_tolerance": (0.0, None, False), "flight_substeps": (1, None, False),
+    "tube_spacing": (0.0, None, True), "wrench_spacing": (0.0, None, False), "exchange_tol": (0.0, None, True),
+    "exchange_rounds": (1, None, False)}
 
-def check_options(problem) -> None:
-    """Refuse ``[options]`` keys a broad-jump problem does not know and bad ``sweep_starts``."""
-    from ..solve import SolveError
 
-    unknown = sorted(set(problem.options) - set(OPTIONS))
-    if unknown:
-        raise SolveError(f"problem {problem.name!r}: unknown [options] key(s) {unknown}; "
-                         f"a broad-jump problem knows {sorted(OPTIONS)}")
-    starts = problem.options.get("sweep_starts", SWEEP_STARTS[0])
-    if starts not in SWEEP_STARTS:
-        raise SolveError(f"problem {problem.name!r}, [options] sweep_starts must be one of {SWEEP_STARTS}, "
-                         f"got {starts!r}")
+def _field_check(name: str, type_name: str) -> Check:
+    lo, hi, lo_open = RANGES.get(name, (None, None, False))
+    if type_name == "bool":
+        return boolean()
+    if type_name == "int":
+        return integer(None if lo is None else int(lo), None if hi is None else int(hi))
+    if type_name == "float":
+        return number(lo, hi, lo_open)
+    raise TypeError(f"JumpSettings.{name}: no [options] check for type {type_name}")
 
 
-def settings_from_problem(problem, tube: float, hessian: str | None = None) -> JumpSettings:
-    """JumpSettings from a problem file's tables (``[options]`` as :data:`OPTIONS` maps them)."""
+_DEFAULTS = JumpSettings()
+#: [options] key -> the JumpSettings field it sets (None: read by the set-up)
+OPTIONS: dict[str, str | None] = {**{k: None for k in SETUP_OPTIONS},
+                                  **{_TOML_NAMES.get(f.name, f.name): f.name for f in fields(JumpSettings)
+                                     if f.name not in _ELSEWHERE}}
+
+#: the keys of a broad-jump problem file
+SCHEMA = Schema("broad-jump", (
+    Setting("latent.dim", "latent_dim", integer(1), 3, "latent dimension d"),
+    Setting("latent.control_points", "control_points", integer(4), _DEFAULTS.n_control,
+            "latent spline control points m (paper 11: too few for the push-off)"),
+    Setting("latent.tube", "tube", TUBE, _DEFAULTS.tube, 'delta (units of sigma^2, Eq. 29) or "<k>x" times '
+            "tube_training"),
+    Setting("solver.hessian", "hessian", choice("exact", "lbfgs"), _DEFAULTS.hessian, "Ipopt's Hessian"),
+    Setting("solver.max_iter", "max_iter", integer(1), _DEFAULTS.max_iter, "Ipopt iterations per phase"),
+    Setting("solver.tol", "tol", number(0, lo_open=True), _DEFAULTS.tol, "Ipopt tolerance"),
+    Setting("sweep.tubes", "sweep_tubes", list_of(TUBE), [_DEFAULTS.tube], "the sweep's tubes"),
+    Table("options", "options", tuple(
+        [Setting(k, k, c, d, doc) for k, (c, d, doc) in SETUP_OPTIONS.items()]
+        + [Setting(_TOML_NAMES.get(f.name, f.name), _TOML_NAMES.get(f.name, f.name),
+                   _field_check(f.name, f.type if isinstance(f.type, str) else f.type.__name__), getattr(_DEFAULTS, f.name), f"JumpSettings.{f.name}")
+           for f in fields(JumpSettings) if f.name not in _ELSEWHERE]),
+        "the set-up's keys and the JumpSettings fields (latentoc/jump/settings.py)"),
+), "the CMU humanoid's standing broad jump (Sect. 4.2)")
+
+
+def check_options(problem: Problem) -> None:
+    """The problem's ``[options]`` checked again (they were at load; a SolveError if changed since)."""
+    try:
+        SCHEMA.checked({"options": problem.options}, f"problem {problem.name!r}")
+    except ProblemError as exc:
+        raise SolveError(str(exc)) from None
+
+
+def settings_from_problem(problem: Problem, tube: float, hessian: str | None = None) -> JumpSettings:
+    """JumpSettings of a problem at tube delta ``tube`` (``[options]`` as :data:`OPTIONS` maps them)."""
     check_options(problem)
-    types = {f.name: f.type for f in fields(JumpSettings)}
-    kw = {}
-    for key, value in problem.options.items():
-        name = OPTIONS[key]
-        if name is not None:
-            kw[name] = {"int": int, "float": float, "bool": bool}.get(str(types[name]), type(value))(value)
-    h = hessian or problem.hessian
+    kw = {name: problem.options[key] for key, name in OPTIONS.items() if name is not None}
     return JumpSettings(tube=float(tube), n_control=int(problem.control_points), max_iter=int(problem.max_iter),
-                        tol=float(problem.tol), hessian="lbfgs" if h in ("lbfgs", "limited-memory") else "exact", **kw)
+                        tol=float(problem.tol), hessian=hessian or problem.hessian, **kw)
+
+
+_SETUP_CACHE: dict[tuple[Any, ...], JumpSetup] = {}  # one set-up per process and training settings
+
+
+def problem_setup(problem: Problem) -> JumpSetup:
+    """The problem's set-up (:func:`setup`), made once per process for its training settings."""
+    o = problem.options
+    training: str | int = "all" if o["training_jumps"] == "all" else 0
+    key = (training, problem.latent_dim, problem.control_points, o["torque_margin"], o["torque_floor"],
+           o["training_stride"])
+    if key not in _SETUP_CACHE:
+        try:
+            _SETUP_CACHE[key] = setup(training, problem.latent_dim, problem.control_points, o["torque_margin"],
+                                      torque_floor=o["torque_floor"], stride=o["training_stride"])
+        except ValueError as exc:
+            raise SolveError(f"problem {problem.name!r}, [options] training_stride: {exc}") from None
+    return _SETUP_CACHE[key]
+
+
+def tube_reference(problem: Problem) -> float:
+    """What a relative tube multiplies: tube_training of the set-up's GPDM (Eq. 30)."""
+    return problem_setup(problem).gpdm.tube_size()
 
 
 def _better(a: dict, b: dict) -> bool:
@@ -168,7 +235,7 @@ def _better(a: dict, b: dict) -> bool:
     return (a["success"], a["distance"]) > (b["success"], b["distance"])
 
 
-def usable_warm_start(warm_start, delta: float) -> dict | None:
+def usable_warm_start(warm_start: Solution | None, delta: float) -> dict | None:
     """What a Solution of this problem at another tube offers a solve at tube ``delta``: its
     ``warm`` when it was solved at a tube no larger than delta, else None."""
     if warm_start is not None and warm_start.warm and warm_start.warm.get("tube", np.inf) <= delta:
@@ -192,39 +259,35 @@ def solve_from_starts(solve: Callable[[dict | None], JumpSolution], warm: dict |
     return sol
 
 
-def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=None, hessian=None,
-                       method: str = "latent", joint_range_deg=None, gpdm=None, verbose: bool = False,
-                       warm_start=None):
+def _violations(r: dict[str, Any], checks: dict[str, float], mu: float) -> dict[str, float]:
+    """The 1 kHz checks as amounts beyond each limit (0: held): tube, torque (N m), friction ratio,
+    point cones (body weights), centre of pressure, ZMP and COM outside their polygons (m)."""
+    cop = checks.get("cop_margin_loaded", checks["cop_margin"])
+    return {"tube": r["max_tube_violation"], "torque_nm": checks["max_torque_violation"],
+            "friction_ratio": max(0.0, checks["max_friction_ratio"] - mu),
+            "point_cone_bw": checks["max_point_cone_violation"], "cop_m": max(0.0, -cop),
+            "zmp_m": max(0.0, -checks["zmp_margin"]), "com_m": max(0.0, -checks["com_margin"]),
+            "dynamics_bw": checks["max_dynamics_residual"]}
+
+
+def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
+                       gpdm: GPDM | None = None, verbose: bool = False, warm_start: Solution | None = None,
+                       **overrides: Any) -> Solution:
     """Solve, check on 1 kHz, return a :class:`latentoc.solve.Solution`. ``warm_start``: the
     Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =
-    "warm+cold"`` the tube is also solved from the training fit and the better jump kept."""
-    from ..solve import Solution, SolveError, resolve_tube
+    "warm+cold"`` the tube is also solved from the training fit and the better jump kept.
+    ``overrides`` (tube, control_points, ...) change the problem's settings first."""
     from .verify import verify
 
+    problem = apply_overrides(problem, overrides)
     if method != "latent":
         raise SolveError(f"broad-jump supports method 'latent' only, got {method!r}")
-    if hessian not in (None, "lbfgs", "exact"):
-        raise SolveError(f"broad-jump supports hessian 'exact' or 'lbfgs', got {hessian!r}")
-    check_options(problem)
     o = problem.options
-    training = "all" if o.get("training_jumps", "one") == "all" else 0
-    stride = o.get("training_stride", 1)
-    key = (training, latent_dim or problem.latent_dim, control_points or problem.control_points,
-           float(o.get("torque_margin", 0.1)), float(o.get("torque_floor", 5.0)), stride)
     t0 = time.perf_counter()
-    if key not in _SETUP_CACHE:
-        try:
-            _SETUP_CACHE[key] = setup(training, key[1], key[2], key[3], torque_floor=key[4], stride=stride)
-        except ValueError as exc:
-            raise SolveError(f"problem {problem.name!r}, [options] training_stride: {exc}") from None
-    js = _SETUP_CACHE[key]
+    js = problem_setup(problem)
     gpdm_time = time.perf_counter() - t0
-    spec = problem.tube if tube is None else tube
-    delta = resolve_tube(spec, js.gpdm.tube_size())
-    if not delta > 0:
-        raise SolveError(f"tube must be positive, got {spec!r}")
-    s = settings_from_problem(problem, delta, hessian)
-    s.n_control = int(key[2])
+    delta = resolve_tube(problem.tube, js.gpdm.tube_size())
+    s = settings_from_problem(problem, delta)
     robot = js.robot(s.mu)
     layer = GPLayer(js.gpdm)
     t1 = time.perf_counter()
@@ -232,21 +295,27 @@ def solve_jump_problem(problem, *, tube=None, latent_dim=None, control_points=No
     compile_time = time.perf_counter() - t1
     sol = solve_from_starts(lambda warm: solve_jump(robot, layer, blocks, js.phases, s, js.init, warm=warm,
                                                     verbose=verbose),
-                            usable_warm_start(warm_start, delta), o.get("sweep_starts", SWEEP_STARTS[0]))
+                            usable_warm_start(warm_start, delta), o["sweep_starts"])
     traj = trajectory(robot, layer, js.phases, sol)
     checks = verify(js.model, traj, s.mu)
     r = sol.result
-    r.update({"problem": problem.name, "kind": problem.kind, "method": "latent", "tube_spec": spec,
+    r.update({"problem": problem.name, "kind": problem.kind, "method": "latent", "tube_spec": problem.tube,
               "distance_initial": js.distance_training,
               "performance_gain_pct": 100.0 * (r["distance"] - js.distance_training) / js.distance_training,
-              "training_jumps": o.get("training_jumps", "one"), "training_stride": stride,
               "training_points": int(js.gpdm.X.shape[0]), "tube_training": js.gpdm.tube_size(),
               "tube_relative": delta * js.gpdm.beta[2], "latent_dim": js.gpdm.latent_dim,
-              "control_points": s.n_control, "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
+              "max_sigma2": float(np.max(traj["sigma2"])), "control_points": s.n_control,
+              "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
               "cost_initial": js.distance_training, "cost": r["distance"],
               "cost_meaning": "jump distance of the toe tip in metres (maximised, Eq. 33)",
-              "friction": s.mu, "restitution_paper": o.get("restitution", 0.5), "restitution_used": 0.0,
+              "friction": s.mu, "restitution_paper": 0.5, "restitution_used": 0.0,
               "max_tube_violation": max(0.0, float(np.max(traj["sigma2"])) - delta), "quadrature_error": 0.0,
-              "settings": asdict(s)})
+              "jump_settings": asdict(s)})
+    r.pop("settings", None)  # solve_jump's copy of the JumpSettings: jump_settings above
     r.update(checks)
-    return Solution(result=r, trajectory=traj, warm=sol.warm_start() if r["success"] else None)
+    r["violations"] = _violations(r, checks, s.mu)
+    traj["x"], traj["P"] = traj.pop("latent"), traj.pop("control_points")  # the result schema's names
+    return Solution(result=r, trajectory=traj, warm=sol.warm_start() if r["success"] else None, gpdm=js.gpdm)
+
+
+SOLVERS["broad-jump"] = solve_jump_problem

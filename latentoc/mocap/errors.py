@@ -4,8 +4,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..errors import LatentocError
 
-class MocapFormatError(ValueError):
+
+class MocapFormatError(LatentocError, ValueError):
     """A malformed ASF or AMC file.
 
     Carries the offending ``path`` and 1-based ``line`` number (``None`` when the

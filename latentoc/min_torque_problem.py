@@ -1,0 +1,302 @@
+"""The ``"latent-min-torque"`` problem kind: its problem schema, GPDM and solve.
+
+:data:`SCHEMA` declares the keys of an arm problem file (``problems/arm-raise.toml``);
+:func:`solve_latent_min_torque` learns the GPDM (once per settings, :func:`problem_gpdm`), builds
+the NLP of :mod:`latentoc.kinds.min_torque`, runs Ipopt and rebuilds the motion on a 1 kHz grid.
+
+Tube sizes (Eq. 29). delta is in units of sigma^2 (Eq. 19), which depend on the learned
+hyperparameters, so the paper's values do not transfer. ``tube`` is either a positive number
+(absolute) or a string ``"<k>x"``: k times ``tube_training``, Eq. 30 for the training sequence
+(max sigma^2 along its latent path). ``tube_initial`` (max sigma^2 along the initial spline, the
+least-squares fit of that path, on a 1 kHz grid) is reported too: for tubes below it the initial
+guess is infeasible (Ipopt restores feasibility first). The smallest feasible delta is sigma^2 at
+the fixed end points. ``tube_relative`` = delta / noise variance (1/beta_3) compares sweeps across
+problems. The measured GPDM settings of arm-raise are in ``problems/arm-raise.toml`` and
+docs/arm-raise.md.
+"""
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import fields
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .dynamics import SymbolicModel
+from .errors import ProblemError, SolveError
+from .gpdm import GPDM, GPDMSettings, learn_gpdm
+from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp,
+                               latent_nlp, sampled_motion)
+from .nlp import ipopt
+from .nlp.ipopt import HESSIANS, IpoptResult
+from .problem import TUBE, Problem
+from .robots import load_robot, robot_names
+from .schema import Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
+from .solve import SOLVERS, Solution, resolve_tube
+from .spline_path import SplinePath, fixed_rows, trapezoid_cost
+
+__all__ = ["SCHEMA", "TRAINING_MOTIONS", "training_motion", "problem_gpdm", "gpdm_settings", "tube_reference",
+           "solve_latent_min_torque", "check_problem"]
+
+TRAJECTORY_RATE_HZ = 1000.0
+
+
+def _arm_trial() -> tuple[np.ndarray, np.ndarray]:
+    from .human_models import arm_training_motion
+    return arm_training_motion()
+
+
+def _broad_jump() -> tuple[np.ndarray, np.ndarray]:
+    from .human_models import broad_jump_training_motion
+    return broad_jump_training_motion()
+
+
+#: Named training motions: name -> () -> (t [N], Q [N x nq]).
+TRAINING_MOTIONS: dict[str, Callable[[], tuple[np.ndarray, np.ndarray]]] = {
+    "human-arm-trial": _arm_trial,
+    "cmu-broad-jump": _broad_jump,
+}
+
+
+_GPDM_DEFAULTS = GPDMSettings()
+_GPDM_CHECKS = {"balanced": boolean(), "outer_iterations": integer(1), "max_iterations": integer(1),
+                "seed": integer(), "init": choice("pca", "random"), "kappa_sq": number(0, lo_open=True),
+                "log_hyper_bound": number(0, lo_open=True), "beta3_max": optional(number(0, lo_open=True)),
+                "gtol": number(0, lo_open=True)}
+_GPDM_DOCS = {"beta3_max": "upper bound on beta_3 (a noise floor 1/beta3_max); none: unbounded",
+              "training_stride": "learn on every k-th training frame (the last one always kept)"}
+_SPLINE = MinTorqueSettings(duration=1.0)  # the transcription's defaults
+
+#: the keys of a latent-min-torque problem file
+SCHEMA = Schema("latent-min-torque", (
+    Setting("robot", "robot", choice(*robot_names()), doc="a latentoc.load_robot name"),
+    Setting("training", "training", choice(*TRAINING_MOTIONS), doc="the training motion"),
+    Setting("duration", "duration", number(0, lo_open=True), doc="s (Table 1)"),
+    Setting("latent.dim", "latent_dim", integer(1), 3, "latent dimension d"),
+    Setting("latent.control_points", "control_points", integer(2), _SPLINE.control_points, "spline control points m"),
+    Setting("latent.spline_degree", "spline_degree", integer(1), _SPLINE.spline_degree, "B-spline degree"),
+    Setting("latent.boundary", "boundary", choice("rest", "pose"), _SPLINE.boundary,
+            '"rest": fix p1, p2, p(m-1), pm (end poses and zero end velocity); "pose": fix p1, pm'),
+    Setting("latent.tube", "tube", TUBE, "1.5x", 'delta (units of sigma^2) or "<k>x" times tube_training'),
+    Setting("transcription.quadrature_points", "quadrature_points", integer(1, 20), _SPLINE.quadrature_points,
+            "Gauss-Legendre nodes per knot interval (objective)"),
+    Setting("transcription.constraint_points", "constraint_points", integer(1), _SPLINE.constraint_points,
+            "tube and joint-limit nodes per knot interval"),
+    Setting("transcription.joint_limits", "joint_limits", boolean(), _SPLINE.joint_limits,
+            "the model's joint limits on the constraint grid"),
+    Setting("transcription.torque_limits", "torque_limits", list_of(number(0, lo_open=True)), [],
+            "N m: [] none, [s] every joint |tau| <= s, or one per joint"),
+    Setting("solver.hessian", "hessian", choice(*HESSIANS), "exact", "Ipopt's Hessian"),
+    Setting("solver.max_iter", "max_iter", integer(1), 300, "Ipopt iterations"),
+    Setting("solver.tol", "tol", number(0, lo_open=True), 1e-8, "Ipopt tolerance"),
+    Setting("baseline.joint_range_deg", "joint_range_deg", number(0, lo_open=True), 45.0,
+            "full-space baseline: +-deg around the training fit (Sect. 4.1.1)"),
+    Setting("sweep.tubes", "sweep_tubes", list_of(TUBE), ["1x", "2x", "5x"], "the sweep's tubes"),
+    Setting("sweep.ranges", "sweep_ranges", list_of(number(0, lo_open=True)), [5.0, 10.0, 20.0],
+            "the baseline sweep's joint ranges, deg"),
+    Setting("start_poses.tubes", "start_pose_tubes", list_of(TUBE), ["1x", "2x", "5x"],
+            "tubes of the new start poses (Sect. 4.1.4)"),
+    Setting("start_poses.frame", "start_pose_frame", text(), "lhand_end", "the end-effector frame of Eq. 31"),
+    Table("gpdm", "gpdm", tuple(
+        [Setting(f.name, f.name, _GPDM_CHECKS[f.name], getattr(_GPDM_DEFAULTS, f.name),
+                 _GPDM_DOCS.get(f.name, "")) for f in fields(GPDMSettings) if f.name in _GPDM_CHECKS]
+        + [Setting("training_stride", "training_stride", integer(1), 1, _GPDM_DOCS["training_stride"])]),
+        "GPDMSettings (latentoc.gpdm) and the training stride"),
+), "the minimum-torque motion of a fixed-base robot (Sect. 4.1)")
+
+
+def check_problem(problem: Problem, where: str) -> None:
+    """Checks across settings: enough control points for the degree and the boundary."""
+    m, k = problem.control_points, problem.spline_degree
+    if m < k + 1:
+        raise ProblemError(f"{where}: key 'latent.control_points' = {m} is fewer than spline_degree + 1 = {k + 1}")
+    n_fixed = len(fixed_rows(max(m, 5), problem.boundary))
+    if m <= n_fixed:
+        raise ProblemError(f"{where}: key 'latent.control_points' = {m}: boundary \"{problem.boundary}\" fixes "
+                           f"{n_fixed}, so at least {n_fixed + 1} are needed to leave one free")
+
+
+def training_motion(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """The problem's training motion (t, Q), subsampled by ``gpdm.training_stride``."""
+    t, Q = TRAINING_MOTIONS[problem.training]()
+    idx = np.arange(0, len(t), problem.gpdm["training_stride"])
+    if idx[-1] != len(t) - 1:
+        idx = np.append(idx, len(t) - 1)  # keep the goal pose
+    return np.asarray(t)[idx], np.asarray(Q)[idx]
+
+
+def gpdm_settings(problem: Problem) -> GPDMSettings:
+    """GPDMSettings from the problem's latent dimension and [gpdm] table."""
+    kw = {k: v for k, v in problem.gpdm.items() if k != "training_stride"}
+    return GPDMSettings(latent_dim=int(problem.latent_dim), **kw)
+
+
+_GPDM_CACHE: dict[str, tuple[GPDM, float]] = {}  # learned once per process and settings
+
+
+def problem_gpdm(problem: Problem) -> tuple[GPDM, float]:
+    """The problem's GPDM and its learning time (s); learned once per training data + settings."""
+    settings = gpdm_settings(problem)
+    key = json.dumps([problem.training, problem.gpdm["training_stride"], settings.to_json()])
+    if key not in _GPDM_CACHE:
+        _, Q = training_motion(problem)
+        t0 = time.perf_counter()
+        model = learn_gpdm(Q, settings)
+        _GPDM_CACHE[key] = (model, time.perf_counter() - t0)
+    return _GPDM_CACHE[key]
+
+
+def tube_reference(problem: Problem) -> float:
+    """What a relative tube multiplies: tube_training of the problem's GPDM (Eq. 30)."""
+    return problem_gpdm(problem)[0].tube_size()
+
+
+def _time_grid(duration: float) -> np.ndarray:
+    return np.linspace(0.0, duration, int(round(duration * TRAJECTORY_RATE_HZ)) + 1)
+
+
+def _base_result(problem: Problem, method: str) -> dict[str, Any]:
+    return {"problem": problem.name, "kind": problem.kind, "method": method,
+            "quadrature": f"gauss-legendre, {problem.quadrature_points} nodes per knot interval"}
+
+
+def _finish(result: dict[str, Any], nlp: MinTorqueNLP, res: IpoptResult, cost_initial: float,
+            motion: dict[str, np.ndarray], motion_init_L: np.ndarray, t: np.ndarray) -> None:
+    dt = float(t[1] - t[0])
+    cost_fine = trapezoid_cost(motion["L"], dt)
+    result.update({
+        "status": res.status, "success": bool(res.success), "iterations": res.iterations,
+        "cost_initial": cost_initial, "cost": res.f,
+        "performance_gain_pct": 100.0 * (cost_initial - res.f) / cost_initial,
+        "cost_meaning": "integral of |tau|^2 dt, N^2 m^2 s (minimised, Eq. 22)",
+        "cost_trapezoid_1ms": cost_fine, "cost_initial_trapezoid_1ms": trapezoid_cost(motion_init_L, dt),
+        "quadrature_error": abs(res.f - cost_fine) / abs(cost_fine),
+        "solve_time_s": res.time_s, "n_variables": int(nlp.w0.size), "n_constraints": int(nlp.lbg.size),
+    })
+
+
+def _limit_violations(problem: Problem, robot: pin.Model, motion: dict[str, np.ndarray]) -> dict[str, float]:
+    """How far the 1 kHz motion leaves the problem's joint limits (rad) and torque limits (N m)."""
+    out = {}
+    if problem.joint_limits:
+        q = motion["q"]
+        out["joint_limits_rad"] = float(max(0.0, np.max(robot.lowerPositionLimit - q),
+                                            np.max(q - robot.upperPositionLimit)))
+    if problem.torque_limits:
+        limit = np.broadcast_to(np.asarray(problem.torque_limits, dtype=float), motion["tau"].shape[1:])
+        out["torque_limits_nm"] = float(max(0.0, np.max(np.abs(motion["tau"]) - limit)))
+    return out
+
+
+def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, x0: np.ndarray, verbose: bool) -> IpoptResult:
+    options = ipopt_options(nlp, tol=problem.tol, max_iter=problem.max_iter, verbose=verbose)
+    return ipopt.solve(nlp.nlp, x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, options, hessian=problem.hessian,
+                       desc=f"{problem.name} ({nlp.method})")
+
+
+def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
+                            gpdm: GPDM | None = None, verbose: bool = False,
+                            warm_start: Solution | None = None) -> Solution:
+    """Minimum-torque motion (L = |tau|^2) in the GPDM latent space or, with
+    ``method="joint-range"``, in the full configuration space (Sect. 4.1.1).
+
+    ``warm_start``: a Solution whose latent control points (its ``warm["P"]``) Ipopt starts from
+    instead of the training fit, used when it was solved at a tube no larger than this one;
+    cost_initial and the gain still refer to the training fit."""
+    if method not in METHODS:
+        raise SolveError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    robot = load_robot(problem.robot)
+    sym = SymbolicModel(robot)
+    if method == "joint-range":
+        return _solve_joint_range(problem, robot, sym, joint_range_deg, verbose)
+
+    t_train, Q_train = training_motion(problem)
+    d = problem.latent_dim if gpdm is None else gpdm.latent_dim
+    if not 1 <= d < Q_train.shape[1]:
+        raise SolveError(f"latent dimension d = {d} must satisfy 1 <= d < D = {Q_train.shape[1]} "
+                         "(the training data's dimension)")
+    if gpdm is not None and gpdm.X.shape[0] != len(t_train):
+        raise SolveError(f"the given GPDM has {gpdm.X.shape[0]} latent points, the problem's training motion "
+                         f"has {len(t_train)} frames")
+    t0 = time.perf_counter()
+    gp = problem_gpdm(problem)[0] if gpdm is None else gpdm
+    gpdm_time = time.perf_counter() - t0
+
+    settings = MinTorqueSettings.from_problem(problem)
+    t = _time_grid(problem.duration)
+    spline = settings.spline()
+    path = SplinePath.fit(spline, t_train, gp.latent_trajectories()[0], problem.boundary)
+    P0 = path.P_init
+    x0 = spline.evaluate(P0, t)
+    tube_training = gp.tube_size()
+    delta = resolve_tube(problem.tube, tube_training)
+    end_s2 = max(float(gp.variance(P0[0])), float(gp.variance(P0[-1])))
+    if delta < end_s2:
+        raise SolveError(f"tube delta = {delta:.4g} is infeasible: the fixed start/end latent points already have "
+                         f"sigma^2 = {end_s2:.4g}; the smallest feasible delta is {end_s2:.4g} "
+                         f"({end_s2 / tube_training:.3g}x of tube_training = {tube_training:.4g})")
+    warm = warm_start.warm if warm_start is not None and warm_start.warm else None
+    initial_guess = warm["P"] if warm is not None and warm.get("tube", np.inf) <= delta else None
+    if initial_guess is not None and np.shape(initial_guess) != P0.shape:
+        raise SolveError(f"warm start has control points of shape {np.shape(initial_guess)}, this problem's "
+                         f"are {P0.shape}")
+
+    t1 = time.perf_counter()
+    nlp = latent_nlp(gp, sym, settings, delta, path)
+    cost_initial = nlp.cost(nlp.w0)
+    build_time = time.perf_counter() - t1
+    x_start = nlp.w0 if initial_guess is None else path.decision_vector(initial_guess)
+    res = _run_ipopt(problem, nlp, x_start, verbose)
+
+    P = nlp.control_points(res.x)
+    x = spline.evaluate(P, t)
+    motion = sampled_motion(nlp.layer, robot, spline, P, t)
+    init = sampled_motion(nlp.layer, robot, spline, P0, t)
+    sigma2 = gp.variance(x)
+    result = _base_result(problem, "latent")
+    result.update({"latent_dim": int(d), "n_training_frames": int(len(t_train)),
+                   "tube_spec": problem.tube, "tube": delta, "tube_relative": delta / gp.noise_variance,
+                   "noise_variance": gp.noise_variance, "tube_training": tube_training,
+                   "tube_initial": float(np.max(gp.variance(x0))), "max_sigma2": float(np.max(sigma2)),
+                   "max_tube_violation": max(0.0, float(np.max(sigma2)) - delta),
+                   "violations": {"tube": max(0.0, float(np.max(sigma2)) - delta),
+                                  **_limit_violations(problem, robot, motion)},
+                   "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None})
+    _finish(result, nlp, res, cost_initial, motion, init["L"], t)
+    trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
+                  "x": x, "x_initial": x0, "P": P, "P_initial": P0, "q_initial": init["q"], "sigma2": sigma2,
+                  "model": np.str_(robot.saveToString())}
+    return Solution(result=result, trajectory=trajectory, warm={"P": P, "tube": delta} if res.success else None,
+                    gpdm=gp)
+
+
+def _solve_joint_range(problem: Problem, robot: pin.Model, sym: SymbolicModel, joint_range_deg: float | None,
+                       verbose: bool) -> Solution:
+    k = problem.joint_range_deg if joint_range_deg is None else joint_range_deg
+    if isinstance(k, bool) or not isinstance(k, (int, float, np.floating)) or not np.isfinite(k) or k <= 0:
+        raise SolveError(f"joint range must be a positive number of degrees, got {k!r}")
+    t_train, Q_train = TRAINING_MOTIONS[problem.training]()  # all frames: no GPDM here
+    settings = MinTorqueSettings.from_problem(problem)
+    t = _time_grid(problem.duration)
+    t0 = time.perf_counter()
+    nlp = joint_range_nlp(sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k))
+    cost_initial = nlp.cost(nlp.w0)
+    build_time = time.perf_counter() - t0
+    res = _run_ipopt(problem, nlp, nlp.w0, verbose)
+    P, P0, spline = nlp.control_points(res.x), nlp.path.P_init, nlp.path.spline
+    motion = sampled_motion(nlp.layer, robot, spline, P, t)
+    init = sampled_motion(nlp.layer, robot, spline, P0, t)
+    result = _base_result(problem, "joint-range")
+    result.update({"joint_range_deg": float(k), "n_training_frames": int(len(t_train)),
+                   "build_time_s": build_time, "gpdm_time_s": 0.0, "warm_start": False,
+                   "violations": _limit_violations(problem, robot, motion)})
+    _finish(result, nlp, res, cost_initial, motion, init["L"], t)
+    trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
+                  "P": P, "P_initial": P0, "q_initial": init["q"], "model": np.str_(robot.saveToString())}
+    return Solution(result=result, trajectory=trajectory)
+
+
+SOLVERS["latent-min-torque"] = solve_latent_min_torque
