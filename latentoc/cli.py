@@ -61,6 +61,7 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--workers", type=int, default=None, help="solve on a Dask LocalCluster of N worker processes")
     w.add_argument("--scheduler", default=None, help="solve on an existing Dask cluster, tcp://HOST:PORT")
     w.add_argument("--resume", action="store_true", help="skip the tasks whose folder in OUT is complete")
+    w.add_argument("--cold", action="store_true", help="serial: start every tube from the training fit (as workers do)")
     w.add_argument("--plots", action="store_true", help="also write OUT/gain_vs_tube.png")
     w.add_argument("--quiet", action="store_true", help="no progress display")
 
@@ -179,7 +180,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     client = _executor(args)
     try:
         outcome = sweep(problem, tubes, client, baseline_ranges=ranges, out=out, resume=args.resume,
-                        progress=None if args.quiet else lambda line: print(line, flush=True))
+                        warm_start=not args.cold, progress=None if args.quiet else lambda line: print(line, flush=True))
     finally:
         if client is not None:
             cluster = getattr(client, "cluster", None)
@@ -189,7 +190,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     print(format_table(outcome.results))
     if out is not None:
         meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "workers": args.workers,
-                "scheduler": args.scheduler, "warm_start": client is None}
+                "scheduler": args.scheduler, "warm_start": client is None and not args.cold}
         print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))
     if args.plots and outcome.results:
         from .plots import plot_gain_vs_tube

@@ -22,8 +22,6 @@ from dataclasses import dataclass, field
 from importlib import import_module
 from typing import Any
 
-import numpy as np
-
 from .errors import ProblemError, SolveError
 from .gpdm import GPDM
 from .problem import KIND_MODULES, Problem, parse_tube

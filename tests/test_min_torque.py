@@ -98,6 +98,7 @@ def check_against_composed(nlp, ref: ca.Function, seed: int) -> None:
     _close(ca.DM(N.hess_sparsity, N.hessian(w, sigma, lam)).full(), H, "Hessian of the Lagrangian")
 
 
+@pytest.mark.slow  # the composed SX Hessian: seconds
 @pytest.mark.parametrize("torque_limits", [(), (50.0,)])
 def test_latent_nlp_equals_composed_casadi(arm, torque_limits):
     gp, _, sym, t = arm
@@ -114,6 +115,7 @@ def test_latent_nlp_equals_composed_casadi(arm, torque_limits):
     check_against_composed(nlp, ref, seed=1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("torque_limits", [(), tuple(range(30, 37))])
 def test_joint_range_nlp_equals_composed_casadi(arm, torque_limits):
     _, robot, sym, _ = arm

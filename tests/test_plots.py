@@ -149,6 +149,7 @@ def test_plot_stick_frames(arm, tmp_path, layout):
     assert len(plots.frame_indices(len(Q), 8)) == 8
 
 
+@pytest.mark.slow  # stick frames of 50 poses and the tube mesh
 def test_plot_solution_arm(arm, gpdm3, tmp_path):
     """An arm result (latent path, training fit, its GPDM): angles, torques (the training fit's by
     numeric RNEA), stick frames and the latent tube."""
@@ -168,6 +169,7 @@ def test_plot_solution_arm(arm, gpdm3, tmp_path):
         check_png(p, figure[p.stem], rows=2)  # rows: initial and optimised stick frames
 
 
+@pytest.mark.slow  # the humanoid's frames and animation
 def test_plot_solution_jump_format(tmp_path):
     """A broad-jump result (actuated tau, one wrench per foot, touchdown, heel offset): contact
     forces and landing balance are derived; a static pose has its ZMP at the COM."""

@@ -1,0 +1,18 @@
+"""Test layers (issue 24): ``pytest`` runs everything (CI); ``pytest -m "not slow"`` is the quick loop.
+
+Marked here by rule: every notebook (``notebook`` and ``slow``) and every test that uses the broad
+jump's set-up (its GPDM, phases and row blocks take tens of seconds to build). The test modules
+mark their own other slow tests (solves, subprocesses, clusters) with ``pytest.mark.slow``.
+"""
+import pytest
+
+SLOW_FIXTURES = {"jump_setup"}  # tests/conftest.py: the broad jump's set-up, shared by the session
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    for item in items:
+        if item.path.suffix == ".ipynb":
+            item.add_marker(pytest.mark.notebook)
+            item.add_marker(pytest.mark.slow)
+        elif SLOW_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
