@@ -165,6 +165,7 @@ print(json.dumps({"cost": r.cost_planner, "knots": r.knots.tolist(), "seeded": r
 
 
 @needs_ompl
+@pytest.mark.slow  # two processes
 def test_same_seed_same_plan_in_a_fresh_process():
     def run(seed: int) -> dict:
         out = subprocess.run([sys.executable, "-c", _REPRO, str(seed)], capture_output=True, text=True, check=True)

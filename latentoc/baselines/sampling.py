@@ -42,6 +42,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import LatentocError
+from ..problem import Problem
 
 __all__ = ["EXTRA", "OmplUnavailable", "require_ompl", "SamplingSettings", "ArmTask", "HermiteEdges",
            "SamplingResult", "KinodynamicRRTStar", "plan", "hermite_samples", "check_motion"]
@@ -100,7 +101,7 @@ class ArmTask:
         return int(self.model.nv)
 
     @classmethod
-    def from_problem(cls, problem: Any, velocity_factor: float = 2.0) -> ArmTask:
+    def from_problem(cls, problem: Problem, velocity_factor: float = 2.0) -> ArmTask:
         """The task of a ``latent-min-torque`` problem (robot, duration, training end poses, limits)."""
         from ..kinds.min_torque import torque_limit_vector
         from ..robots import load_robot
@@ -117,12 +118,8 @@ class ArmTask:
                    joint_limits=bool(problem.joint_limits))
 
 
-def _training_motion(problem: Any) -> tuple[np.ndarray, np.ndarray]:
-    # training_motion is moving from latentoc.problem to the kind's module (refactor under way)
-    try:
-        from ..problem import training_motion
-    except ImportError:
-        from ..min_torque_problem import training_motion
+def _training_motion(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+    from ..min_torque_problem import training_motion
     return training_motion(problem)
 
 
@@ -370,7 +367,7 @@ class KinodynamicRRTStar:
                     "end_time_error": float(abs(r.knots[-1, 2 * n] - task.duration))}
 
 
-def plan(problem: Any, seconds: list[float] | None = None, iterations: list[int] | None = None,
+def plan(problem: Problem, seconds: list[float] | None = None, iterations: list[int] | None = None,
          settings: SamplingSettings = SamplingSettings()) -> list[SamplingResult]:
     """Plan ``problem``'s motion and report at each cumulative budget (``seconds`` or ``iterations``)."""
     if (seconds is None) == (iterations is None):
