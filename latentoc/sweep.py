@@ -108,8 +108,7 @@ def sweep(problem: Problem, tubes: Sequence[float | str] | None = None, executor
         raise SweepError("resume needs the output folder the earlier run wrote")
     done: dict[str, Result] = {}
     if resume and out is not None:
-        done = {t.label: load_result(Path(out) / t.label) for t in tasks
-                if (Path(out) / t.label / "result.json").is_file()}
+        done = {t.label: _resumed(t, Path(out) / t.label) for t in tasks if (Path(out) / t.label / "result.json").is_file()}
     todo = [t for t in tasks if t.label not in done]
     say = progress or (lambda line: None)
     if executor is None:
@@ -120,6 +119,17 @@ def sweep(problem: Problem, tubes: Sequence[float | str] | None = None, executor
     failures = [f for f in outcome.values() if isinstance(f, SweepFailure)]
     results = [r for t in tasks if isinstance(r := by_label.get(t.label), Result)]
     return SweepResult(results=results, failures=failures)
+
+
+def _resumed(task: SweepTask, folder: Path) -> Result:
+    """The result a resumed sweep keeps: read, and solved with this task's settings."""
+    r = load_result(folder)
+    settings = dict(task.problem["settings"], **({"tube": task.tube} if task.method == "latent" else {}))
+    differ = sorted(k for k in settings if r.settings.get(k) != settings[k])
+    if differ or r.method != task.method:
+        raise SweepError(f"{folder} was written for other settings ({', '.join(differ) or 'method'}); "
+                         "resume in the folder of the same sweep, or write to another")
+    return r
 
 
 def _write(out: str | Path | None, label: str, files: dict[str, bytes]) -> None:

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from latentoc.errors import LatentocError, ProblemError
+from latentoc.gpdm import GPDMSettings
 from latentoc.min_torque_problem import training_motion
 from latentoc.problem import Problem, describe_problem, kind_schema, load_problem, parse_tube, problem_names
 
@@ -18,7 +19,7 @@ def test_packaged_problems_load():
     assert (p.kind, p.robot, p.duration, p.latent_dim, p.control_points) == \
         ("latent-min-torque", "human-arm", 2.9, 3, 9)  # Table 1
     assert p.name == "arm-raise" and p.source.endswith("arm-raise.toml")
-    assert p.gpdm["beta3_max"] == 3000.0 and p.gpdm["training_stride"] == 6
+    assert p.gpdm["training_stride"] == 6
 
 
 def test_load_by_path_and_stride(tmp_path):
@@ -57,7 +58,7 @@ def _edited(tmp_path, name, old, new):
     ("arm-raise-small", ("control_points = 7", "control_points = 4"), "at least 5 are needed"),
     ("arm-raise-small", ("control_points = 7", "control_points = 7.0"), "latent.control_points' must be an integer"),
     ("arm-raise-small", ('tube = "5x"', "tube = -1.0"), "key 'latent.tube' must be a positive number or a relative"),
-    ("arm-raise-small", ("[gpdm]", "[gpdm]\nfoo = 2"), r"unknown key 'gpdm.foo'; \[gpdm\] allows: balanced, beta3_max"),
+    ("arm-raise-small", ("[gpdm]", "[gpdm]\nfoo = 2"), r"unknown key 'gpdm.foo'; \[gpdm\] allows: balanced, "),
     ("arm-raise-small", ("[gpdm]", "[gpdm]\nbalanced = 1"), "key 'gpdm.balanced' must be true or false, got 1"),
     ("arm-raise-small", ("[gpdm]", "[extras]\na = 1\n[gpdm]"), r"unknown table \[extras\]; .* \[baseline\], \[gpdm\]"),
     ("arm-raise-small", ('name = "arm-raise-small"', 'seed = 0'), "unknown key 'seed'; .* top-level keys description, duration, "
@@ -110,8 +111,8 @@ def test_jump_options_are_the_jump_settings():
 
 
 def test_overrides_are_checked_like_the_file():
-    p = load_problem("arm-raise-small", tube="2x", max_iter=4, gpdm={"beta3_max": 500.0})
-    assert (p.tube, p.max_iter, p.gpdm["beta3_max"], p.gpdm["training_stride"]) == ("2x", 4, 500.0, 12)
+    p = load_problem("arm-raise-small", tube="2x", max_iter=4, gpdm={"seed": 3})
+    assert (p.tube, p.max_iter, p.gpdm["seed"], p.gpdm["training_stride"]) == ("2x", 4, 3, 12)
     assert p.replace(latent_dim=2).latent_dim == 2 and p.latent_dim == 3  # a copy
     j = load_problem("broad-jump", options={"friction": 0.5}, hessian="lbfgs")
     assert j.options["friction"] == 0.5 and j.options["n_flight"] == 80 and j.hessian == "lbfgs"
@@ -143,8 +144,8 @@ def test_show_prints_every_resolved_setting():
     text = describe_problem(p)
     rows = kind_schema(p.kind).describe(p.settings)
     assert len(text.splitlines()) == 2 + len(rows)
-    assert 'latent.tube = "5x"' in text and "gpdm.beta3_max = 3000.0" in text
-    assert "gpdm.max_iterations = 60" in text  # not in the file: GPDMSettings' default
+    assert 'latent.tube = "5x"' in text and "gpdm.training_stride = 6" in text
+    assert f"gpdm.seed = {GPDMSettings().seed}" in text  # not in the file: GPDMSettings' default
     assert "options.exchange_rounds = 8" in describe_problem(load_problem("broad-jump"))
 
 

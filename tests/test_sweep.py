@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from latentoc import load_problem, load_result, sweep
+from latentoc.errors import SweepError
 from latentoc.sweep import SweepTask, format_table, run_task, write_sweep
 
 REPO = Path(__file__).resolve().parents[1]
@@ -61,6 +62,8 @@ def test_resume_skips_the_written_tasks(swept):
     assert len(lines) == 1 and "tube 50x" in lines[0]  # only the new tube was solved
     assert [r.to_json() for r in again.results[::2]] == [r.to_json() for r in outcome.results]
     assert (out / "tube-50x" / "result.json").is_file()
+    with pytest.raises(SweepError, match="tube-200x was written for other settings .latent_dim"):
+        sweep(load_problem("arm-raise-small", latent_dim=2), ["200x"], out=out, resume=True, progress=None)
 
 
 def test_warm_started_sweep_reaches_the_cold_optima():
