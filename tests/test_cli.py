@@ -62,6 +62,7 @@ def test_errors_exit_2_without_files(tmp_path, capsys, args, match):
     assert not out.exists()
 
 
+@pytest.mark.slow  # a fresh process
 def test_module_entry_point_subprocess(tmp_path):
     p = subprocess.run([sys.executable, "-m", "latentoc", "solve", "arm-raise-small", "--tube", "-1",
                         "--out", str(tmp_path / "o")], capture_output=True, text=True, cwd=REPO, timeout=120)
@@ -69,6 +70,7 @@ def test_module_entry_point_subprocess(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow  # a fresh process
 def test_a_bug_exits_1_with_its_traceback(tmp_path):
     """An exception that is not a LatentocError is a bug: its traceback, exit code 1."""
     out = tmp_path / "o"

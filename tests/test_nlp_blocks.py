@@ -167,6 +167,7 @@ print(json.dumps({{k: f.class_name() for k, f in b.functions.items()}}))
 """
 
 
+@pytest.mark.slow  # a fresh process
 def test_fresh_process_finds_the_cache(cache, monkeypatch):
     """A second compile_blocks in a new process loads the three libraries through the cache
     index and writes nothing (no new or rebuilt file)."""

@@ -35,6 +35,7 @@ def test_blocks_fall_back_to_sx_without_a_working_compiler(cc, tmp_path, monkeyp
     assert np.allclose(np.asarray(b.functions["rows"](x, x, x, [0.5])), np.asarray(ref(x, x, x, [0.5])))
 
 
+@pytest.mark.slow  # fresh processes
 def test_ipopt_loads_its_blas_on_one_thread():
     """Loading the Ipopt plugin starts no OpenBLAS worker threads (counted in /proc in a fresh
     process), leaves $OPENBLAS_NUM_THREADS unset, and a value the user sets is obeyed."""
