@@ -11,7 +11,7 @@ turns that, an unknown key, a key the kind does not read, or a missing required 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -269,7 +269,3 @@ class Schema:
 def _copy(value: Any) -> Any:
     return list(value) if isinstance(value, (list, tuple)) else value
 
-
-def table_settings(items: Sequence[tuple[str, Check, Any, str]]) -> tuple[Setting, ...]:
-    """Settings of a :class:`Table` from (key, check, default, doc) rows; a key is its own name."""
-    return tuple(Setting(k, k, c, d, doc) for k, c, d, doc in items)

@@ -9,10 +9,13 @@ Contract for a problem kind (``latentoc.min_torque_problem``, ``latentoc.jump.pr
 The solver reads every setting from the :class:`~latentoc.problem.Problem` (already checked
 against the kind's schema), raises :class:`~latentoc.errors.SolveError` for what only solving
 can find wrong (an infeasible tube, an unknown method) BEFORE any work is written, and returns a
-:class:`Solution`: a JSON-ready ``result`` dict (its fields are listed in
-:data:`latentoc.results.CORE_FIELDS`), the ``trajectory`` arrays (:data:`latentoc.results.TRAJECTORY_KEYS`),
-the GPDM it used and what a neighbouring tube may start from (``warm``).
-:class:`latentoc.results.Result` turns a Solution into the versioned result schema.
+:class:`Solution`: a JSON-ready ``result`` dict (at least problem, kind, method, status, success,
+iterations, cost_initial, cost, performance_gain_pct, cost_meaning, solve_time_s and violations;
+for a latent solve tube_spec, tube, tube_relative, tube_training, max_sigma2; the rest becomes
+the result's details), the ``trajectory`` arrays (keys from :data:`latentoc.results.TRAJECTORY_KEYS`),
+the GPDM it used and what a neighbouring tube may start from (``warm``, with its ``tube``).
+:class:`latentoc.results.Result` turns a Solution into the versioned result schema; this
+module's :func:`solve` returns the Solution, the public ``latentoc.solve`` the Result.
 """
 
 from __future__ import annotations
