@@ -29,7 +29,7 @@ from .dynamics import SymbolicModel
 from .errors import ProblemError, SolveError
 from .gpdm import GPDM, GPDMSettings, learn_gpdm
 from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp,
-                               latent_nlp, sampled_motion)
+                               latent_nlp, sampled_motion, violated_times)
 from .nlp import ipopt
 from .nlp.ipopt import HESSIANS, IpoptResult
 from .problem import TUBE, Problem
@@ -197,6 +197,32 @@ def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, x0: np.ndarray, verbose: boo
                        desc=f"{problem.name} ({nlp.method})")
 
 
+EXCHANGE_ROUNDS = 8
+
+
+def _solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild, x0: np.ndarray, sym: SymbolicModel,
+                     t: np.ndarray, verbose: bool) -> tuple[MinTorqueNLP, IpoptResult, list[dict]]:
+    """Solve, check the tube and the limits on the 1 kHz grid t, add the violated times to the NLP
+    (``rebuild(extra)``) and resume from the point, until the grid holds (the exchange)."""
+    rounds = []
+    while True:
+        res = _run_ipopt(problem, nlp, x0, verbose)
+        entry = {"iterations": res.iterations, "time_s": res.time_s, "status": res.status,
+                 "grid_points": int(len(nlp.grid_t)), "torque_points": int(len(nlp.quad_t) + len(nlp.extra.torque))}
+        rounds.append(entry)
+        if not res.success or len(rounds) >= EXCHANGE_ROUNDS:
+            break
+        P = nlp.control_points(res.x)
+        motion = sampled_motion(nlp.layer, sym.model, nlp.path.spline, P, t)
+        sigma2 = nlp.layer.variance(nlp.path.spline.evaluate(P, t))[0] if nlp.tube is not None else None
+        add, worst = violated_times(nlp, motion, sigma2, t, sym, problem.torque_limits, problem.joint_limits)
+        entry["violation_1khz"] = worst
+        if not add:
+            break
+        nlp, x0 = rebuild(nlp.extra.merged(add)), res.x
+    return nlp, res, rounds
+
+
 def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
                             gpdm: GPDM | None = None, verbose: bool = False,
                             warm_start: Solution | None = None) -> Solution:
@@ -249,7 +275,8 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
     cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t1
     x_start = nlp.w0 if initial_guess is None else path.decision_vector(initial_guess)
-    res = _run_ipopt(problem, nlp, x_start, verbose)
+    nlp, res, rounds = _solve_exchanged(problem, nlp, lambda extra: latent_nlp(gp, sym, settings, delta, path,
+                                                                               extra=extra), x_start, sym, t, verbose)
 
     P = nlp.control_points(res.x)
     x = spline.evaluate(P, t)
@@ -264,8 +291,11 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
                    "max_tube_violation": max(0.0, float(np.max(sigma2)) - delta),
                    "violations": {"tube": max(0.0, float(np.max(sigma2)) - delta),
                                   **_limit_violations(problem, robot, motion)},
-                   "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None})
+                   "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None,
+                   "exchange_rounds": rounds})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
+    result["iterations"] = sum(r["iterations"] for r in rounds)
+    result["solve_time_s"] = sum(r["time_s"] for r in rounds)
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
                   "x": x, "x_initial": x0, "P": P, "P_initial": P0, "q_initial": init["q"], "sigma2": sigma2,
                   "model": np.str_(robot.saveToString())}
@@ -285,15 +315,18 @@ def _solve_joint_range(problem: Problem, robot: pin.Model, sym: SymbolicModel, j
     nlp = joint_range_nlp(sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k))
     cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t0
-    res = _run_ipopt(problem, nlp, nlp.w0, verbose)
+    nlp, res, rounds = _solve_exchanged(problem, nlp, lambda extra: joint_range_nlp(
+        sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k), extra=extra), nlp.w0, sym, t, verbose)
     P, P0, spline = nlp.control_points(res.x), nlp.path.P_init, nlp.path.spline
     motion = sampled_motion(nlp.layer, robot, spline, P, t)
     init = sampled_motion(nlp.layer, robot, spline, P0, t)
     result = _base_result(problem, "joint-range")
     result.update({"joint_range_deg": float(k), "n_training_frames": int(len(t_train)),
                    "build_time_s": build_time, "gpdm_time_s": 0.0, "warm_start": False,
-                   "violations": _limit_violations(problem, robot, motion)})
+                   "violations": _limit_violations(problem, robot, motion), "exchange_rounds": rounds})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
+    result["iterations"] = sum(r["iterations"] for r in rounds)
+    result["solve_time_s"] = sum(r["time_s"] for r in rounds)
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
                   "P": P, "P_initial": P0, "q_initial": init["q"], "model": np.str_(robot.saveToString())}
     return Solution(result=result, trajectory=trajectory)

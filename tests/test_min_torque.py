@@ -135,7 +135,7 @@ def test_rows_are_sigma2_and_mean_at_the_grid(arm):
     nlp = latent_nlp(gp, sym, SETTINGS, 0.05, t_train=t)
     g = nlp.nlp.constraints(nlp.w0)
     x = nlp.path.spline.evaluate(nlp.path.P_init, nlp.grid_t)
-    assert np.allclose(g[nlp.rows["tube"]], gp.variance(x), rtol=1e-8, atol=0)
+    assert np.allclose(g[nlp.rows["tube"]], gp.variance(x) / 0.05, rtol=1e-8, atol=0)  # relative to delta
     assert np.allclose(g[nlp.rows["joint_limits"]].reshape(-1, 7), gp.mean(x), rtol=0, atol=1e-10)
 
 

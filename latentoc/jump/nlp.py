@@ -302,7 +302,8 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     ni = NodeInputs(len(t_tube), n_w)
     ni.spline([sp_.basis(t_tube, 0)], var.latent_index(), P_fixed)
     S, s0 = ni.build()
-    families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(len(t_tube), format="csr")))
+    # relative, sigma^2 / delta <= 1, so that Ipopt's tolerances are relative to delta
+    families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(len(t_tube), format="csr") / s.tube))
     names.extend(["tube"] * len(t_tube))
     times.extend(t_tube)
 
@@ -334,7 +335,7 @@ def _row_bounds(names: np.ndarray, robot: JumpRobot, s: JumpSettings, ph: Phases
               "toe_position": (-s.foot_tolerance, s.foot_tolerance), "heel_height": (-s.contact_tolerance, np.inf),
               "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "takeoff": (0, 0),
               "pitch_integration": (0, 0), "flight_clearance": (0, np.inf), "touchdown_position": (0, 0),
-              "impact": (0, 0), "tube": (-np.inf, s.tube),
+              "impact": (0, 0), "tube": (-np.inf, 1.0),
               **{k: (0, np.inf) for k in ("wrench_normal", "wrench_friction", "cop_front", "cop_heel", "cop_ball",
                                           "cop_pad")}}
     lbg, ubg = np.zeros(len(names)), np.zeros(len(names))

@@ -123,7 +123,7 @@ def solve_jump(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], 
         rounds.append(entry)
         if not s.exchange or not run2.success:
             break
-        tol = {"wrench": s.exchange_tol, "flight_torque": s.exchange_tol, "tube": TUBE_TOL * s.tube}
+        tol = {"wrench": s.exchange_tol, "flight_torque": s.exchange_tol, "tube": TUBE_TOL}
         found, worst = binding_times(probe, run2.x, tol)
         new = found.minus(nlp2.meta["samples"])
         entry["violation_1khz"] = worst

@@ -39,14 +39,15 @@ from ..problem import Problem
 from ..spline import BSpline
 from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
 
-__all__ = ["METHODS", "MinTorqueSettings", "MinTorqueNLP", "latent_nlp", "joint_range_nlp", "torque_block",
-           "torque_limit_vector", "ipopt_options", "sampled_motion"]
+__all__ = ["METHODS", "MinTorqueSettings", "MinTorqueNLP", "Samples", "latent_nlp", "joint_range_nlp",
+           "torque_block", "torque_limit_vector", "ipopt_options", "sampled_motion", "violated_times"]
 
 METHODS = ("latent", "joint-range")
 
 # The latent rows scaled to a largest gradient of 1 (Ipopt scales only rows above 100 by default):
 # the sigma^2 rows' gradients are ~1e-3. The joint-range NLP keeps Ipopt's default.
 LATENT_ROW_SCALING = {"nlp_scaling_constr_target_gradient": 1.0}
+CONSTRAINT_TOL = 1e-8  # Ipopt's (unscaled) row violation at a solution, also when "acceptable"
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,20 @@ class MinTorqueSettings:
 
 
 @dataclass
+class Samples:
+    """Times the exchange adds: to the constraint grid (tube, joint limits) and torque-limit rows."""
+
+    grid: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    torque: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def merged(self, other: "Samples") -> "Samples":
+        return Samples(np.union1d(self.grid, other.grid), np.union1d(self.torque, other.torque))
+
+    def __bool__(self) -> bool:
+        return bool(len(self.grid) or len(self.torque))
+
+
+@dataclass
 class MinTorqueNLP:
     """The assembled NLP over the free control points, its bounds and its nodes."""
 
@@ -91,6 +106,8 @@ class MinTorqueNLP:
     quad_w: np.ndarray
     grid_t: np.ndarray
     rows: dict[str, slice] = field(default_factory=dict)  # constraint rows of each family
+    extra: Samples = field(default_factory=lambda: Samples())  # the exchange's added times
+    tube: float | None = None
 
     @property
     def w0(self) -> np.ndarray:
@@ -160,26 +177,32 @@ def _joint_limit_family(layer: GPLayer | IdentityLayer, path: SplinePath, t: np.
 
 
 def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, settings: MinTorqueSettings,
-           path: SplinePath, lbx: np.ndarray, ubx: np.ndarray, tube: float | None) -> MinTorqueNLP:
+           path: SplinePath, lbx: np.ndarray, ubx: np.ndarray, tube: float | None,
+           extra: Samples | None = None) -> MinTorqueNLP:
     if model.nq != model.nv or model.nv != layer.output_dim:
         raise ValueError(f"the motion has {layer.output_dim} joint angles but the model has nq = {model.nq}, "
                          f"nv = {model.nv}; the minimum-torque NLP needs nq = nv = D")
     spline = path.spline
     quad_t, quad_w = gauss_legendre_nodes(spline, settings.quadrature_points)
     grid_t = constraint_times(spline, settings.constraint_points)
+    extra = extra or Samples()
+    grid_t = np.union1d(grid_t, extra.grid)
     Kg = len(grid_t)
     families, lbg, ubg = [], [], []
-    if tube is not None:  # sigma^2(x(t_j)) <= delta (Eq. 29)
+    if tube is not None:  # sigma^2(x(t_j)) / delta <= 1 (Eq. 29), relative so that Ipopt's tolerances are
         S, s0 = _spline_inputs(path, grid_t, 1)
-        families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(Kg, format="csr")))
+        families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(Kg, format="csr") / tube))
         lbg.append(np.full(Kg, -np.inf))
-        ubg.append(np.full(Kg, float(tube)))
+        ubg.append(np.ones(Kg))
     if settings.joint_limits:
         families.append(_joint_limit_family(layer, path, grid_t))
         lbg.append(np.tile(np.asarray(model.model.lowerPositionLimit, dtype=float), Kg))
         ubg.append(np.tile(np.asarray(model.model.upperPositionLimit, dtype=float), Kg))
     tmax = torque_limit_vector(settings.torque_limits, model.nv)
-    torque, lb, ub = _torque_family(model, layer, path, quad_t, quad_w, tmax)
+    # torque rows also at the exchange's times, with no weight in the objective
+    torque_t = np.concatenate([quad_t, extra.torque]) if tmax is not None else quad_t
+    torque_w = np.concatenate([quad_w, np.zeros(len(torque_t) - len(quad_t))])
+    torque, lb, ub = _torque_family(model, layer, path, torque_t, torque_w, tmax)
     families.append(torque)
     lbg.append(lb)
     ubg.append(ub)
@@ -188,11 +211,12 @@ def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, se
             for f in nlp.families if f.n_rows}
     return MinTorqueNLP(method=method, nlp=nlp, path=path, layer=layer, lbx=lbx, ubx=ubx,
                         lbg=np.concatenate(lbg), ubg=np.concatenate(ubg), quad_t=quad_t, quad_w=quad_w,
-                        grid_t=grid_t, rows=rows)
+                        grid_t=grid_t, rows=rows, extra=extra, tube=tube)
 
 
 def latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: MinTorqueSettings, tube: float,
-               path: SplinePath | None = None, t_train: np.ndarray | None = None) -> MinTorqueNLP:
+               path: SplinePath | None = None, t_train: np.ndarray | None = None,
+               extra: Samples | None = None) -> MinTorqueNLP:
     """Eq. 22 over the latent control points, subject to the tube sigma^2 <= ``tube`` (Eq. 29).
 
     ``path``: the latent spline with its initial control points; else the fit of the GPDM's
@@ -203,23 +227,26 @@ def latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: MinTorqueSettings, tu
         path = SplinePath.fit(settings.spline(), t_train, gpdm.latent_trajectories()[0], settings.boundary)
     n = path.n_w
     return _build("latent", model, GPLayer(gpdm), settings, path, np.full(n, -np.inf), np.full(n, np.inf),
-                  float(tube))
+                  float(tube), extra)
 
 
 def joint_range_nlp(model: SymbolicModel, settings: MinTorqueSettings, t_train: np.ndarray, Q_train: np.ndarray,
-                    joint_range_deg: float) -> MinTorqueNLP:
+                    joint_range_deg: float, extra: Samples | None = None) -> MinTorqueNLP:
     """Eq. 4 (= Eq. 22 with q = x) over joint-space control points, each within
     +-``joint_range_deg`` of the training motion's spline fit (Sect. 4.1.1)."""
     path = SplinePath.fit(settings.spline(), t_train, Q_train, settings.boundary)
     k = np.radians(float(joint_range_deg))
-    return _build("joint-range", model, IdentityLayer(model.nq), settings, path, path.w0 - k, path.w0 + k, None)
+    return _build("joint-range", model, IdentityLayer(model.nq), settings, path, path.w0 - k, path.w0 + k, None,
+                  extra)
 
 
 def ipopt_options(nlp: MinTorqueNLP, *, tol: float, max_iter: int, verbose: bool = False) -> dict:
     """Ipopt's options for this NLP: monotone barrier (Fiacco-McCormick), an acceptable level of
-    max(1e-6, 100 tol) for 10 iterations, and the latent row scaling."""
+    max(1e-6, 100 tol) for 10 iterations, rows held to CONSTRAINT_TOL (the tube relative to delta,
+    limits in rad and N m), and the latent row scaling."""
     options = {"tol": float(tol), "max_iter": int(max_iter), "mu_strategy": "monotone",
                "acceptable_tol": max(1e-6, 100.0 * float(tol)), "acceptable_iter": 10,
+               "constr_viol_tol": CONSTRAINT_TOL, "acceptable_constr_viol_tol": CONSTRAINT_TOL,
                "print_level": 5 if verbose else 0}
     if nlp.method == "latent":
         options.update(LATENT_ROW_SCALING)
@@ -236,3 +263,43 @@ def sampled_motion(layer: GPLayer | IdentityLayer, robot: pin.Model, spline: BSp
     tau = np.array([np.array(pin.rnea(robot, data, q, v, a)) for q, v, a in zip(m.y, m.yd, m.ydd)])
     return {"q": np.asarray(m.y), "v": np.asarray(m.yd), "a": np.asarray(m.ydd), "tau": tau,
             "L": np.sum(tau * tau, axis=1)}
+
+
+TUBE_TOL = 1e-6  # sigma^2 on the 1 kHz grid may exceed delta by this fraction of it
+LIMIT_TOL = 1e-6  # rad and N m a 1 kHz sample may leave the joint and torque limits by
+
+
+def _worst_times(t: np.ndarray, slack: np.ndarray, tol: float) -> np.ndarray:
+    """The worst time of each stretch of t where slack < -tol (local minima of the slack)."""
+    left = np.concatenate([[np.inf], slack[:-1]])
+    right = np.concatenate([slack[1:], [np.inf]])
+    return t[(slack < -tol) & (slack <= left) & (slack <= right)]
+
+
+def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.ndarray | None, t: np.ndarray,
+                   model: SymbolicModel, torque_limits: Sequence[float], joint_limits: bool) -> tuple[Samples, dict]:
+    """Where the motion sampled at times t (:func:`sampled_motion`) leaves the tube (by more than
+    TUBE_TOL of delta), the joint limits or the torque limits (by more than LIMIT_TOL): each violated
+    stretch's worst time, to add to the NLP (the exchange), and the largest violations."""
+    inside = (t > 0) & (t < t[-1])
+    grid_slack = np.full(len(t), np.inf)
+    worst = {}
+    if sigma2 is not None and nlp.tube is not None:
+        slack = (nlp.tube - sigma2) / nlp.tube
+        worst["tube_rel"] = float(max(0.0, -slack.min()))
+        grid_slack = np.minimum(grid_slack, slack / TUBE_TOL)
+    if joint_limits:
+        q = motion["q"]
+        slack = np.minimum(q - model.model.lowerPositionLimit, model.model.upperPositionLimit - q).min(axis=1)
+        worst["joint_limits_rad"] = float(max(0.0, -slack.min()))
+        grid_slack = np.minimum(grid_slack, slack / LIMIT_TOL)
+    add = Samples(_worst_times(t[inside], grid_slack[inside], 1.0))
+    tmax = torque_limit_vector(torque_limits, model.nv)
+    if tmax is not None:
+        slack = (tmax - np.abs(motion["tau"])).min(axis=1)
+        worst["torque_limits_nm"] = float(max(0.0, -slack.min()))
+        add.torque = _worst_times(t, slack, LIMIT_TOL)
+    known = nlp.extra.merged(Samples(nlp.grid_t, nlp.quad_t))
+    add = Samples(add.grid[~np.isin(np.round(add.grid, 9), np.round(known.grid, 9))],
+                  add.torque[~np.isin(np.round(add.torque, 9), np.round(known.torque, 9))])
+    return add, worst
