@@ -1,6 +1,6 @@
 """Broad-jump benchmark: the first solve on an empty cache, cold solves, where their time goes.
 
-Run: ``python -m latentoc bench jump [--tubes 0.02] [--no-first] [--no-second-gpdm]``.
+Run: ``python -m latentoc bench jump [--tubes 0.02] [--no-first] [--no-second-gpdm] [--families]``.
 Targets (issue 21): the first solve <= 3 min with all compilation; a second GPDM on a warm
 cache compiles nothing; a cold solve <= 20 s; function evaluations <= 50 ms per iteration.
 
@@ -82,6 +82,41 @@ def cold_solve(tube: float) -> dict:
     return {"load": load, "sol": sol}
 
 
+def family_times(tube: float, repeat: int = 5) -> list[tuple]:
+    """Median ms of each row family's values, local Jacobians and local Hessians at the training start."""
+    import numpy as np
+
+    from latentoc.jump.nlp import build_nlp
+    from latentoc.jump.problem import settings_from_problem, setup
+    from latentoc.jump.start import initial_point
+    from latentoc.latent.gp_layer import GPLayer
+    from latentoc.problem import load_problem
+
+    js = setup(0)
+    s = settings_from_problem(load_problem("broad-jump"), tube)
+    robot, layer = js.robot(s.mu), GPLayer(js.gpdm)
+    nlp = build_nlp(robot, layer, js.blocks(robot), js.phases, s, js.init["P"], "distance")
+    w = initial_point(robot, layer, nlp, js.init["P"], js.init["t"], js.init["base"], js.init["x_L"],
+                      js.phases.takeoff, js.phases.touchdown)
+    rows = []
+    for f in nlp.nlp.families:
+        if f.evaluator is None or not f.K:
+            continue
+        S = f.local_inputs(w)
+        lam = np.ones((f.K, f.evaluator.n_out))
+        times = []
+        for call in (lambda: f.evaluator.values(S), lambda: f.evaluator.jacobian(S),
+                     lambda: f.evaluator.hessian(S, lam)):
+            ts = []
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                call()
+                ts.append(time.perf_counter() - t0)
+            times.append(1e3 * float(np.median(ts)))
+        rows.append((f.name, f.K, f.evaluator.n_in, *times))
+    return rows
+
+
 def _run_line(name: str, run) -> str:
     cb = " ".join(f"{1e3 * run.timings.get(n, 0.0) / max(run.calls.get(n, 0), 1):7.1f}x{run.calls.get(n, 0):<4d}"
                   for n in CALLBACKS)
@@ -97,7 +132,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tubes", nargs="*", type=float, default=[0.02])
     p.add_argument("--no-first", action="store_true", help="skip the first solve on an empty cache")
     p.add_argument("--no-second-gpdm", action="store_true")
+    p.add_argument("--families", action="store_true", help="only each row family's evaluation times")
     a = p.parse_args(argv)
+    if a.families:
+        print("| family | nodes | local inputs | values ms | local Jacobians ms | local Hessians ms |")
+        print("| --- | --- | --- | --- | --- | --- |")
+        for name, K, n_in, tv, tj, th in family_times(a.tubes[0]):
+            print(f"| {name} | {K} | {n_in} | {tv:.1f} | {tj:.1f} | {th:.1f} |")
+        return 0
     print(f"machine: {os.cpu_count()} CPUs, python {sys.version.split()[0]}; per-callback columns: "
           f"ms per call x calls of {', '.join(CALLBACKS)}")
     with tempfile.TemporaryDirectory(prefix="latentoc-cache-") as cache:
