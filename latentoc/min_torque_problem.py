@@ -30,6 +30,7 @@ from .errors import ProblemError, SolveError
 from .gpdm import GPDM, GPDMSettings, learn_gpdm
 from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp,
                                latent_nlp, sampled_motion, violated_times)
+from .latent import GPLayer
 from .nlp import ipopt
 from .nlp.ipopt import HESSIANS, IpoptResult
 from .problem import TUBE, Problem
@@ -214,7 +215,9 @@ def _solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild, x0: np.ndarra
             break
         P = nlp.control_points(res.x)
         motion = sampled_motion(nlp.layer, sym.model, nlp.path.spline, P, t)
-        sigma2 = nlp.layer.variance(nlp.path.spline.evaluate(P, t))[0] if nlp.tube is not None else None
+        layer = nlp.layer
+        sigma2 = layer.variance(nlp.path.spline.evaluate(P, t))[0] \
+            if isinstance(layer, GPLayer) and nlp.tube is not None else None
         add, worst = violated_times(nlp, motion, sigma2, t, sym, problem.torque_limits, problem.joint_limits)
         entry["violation_1khz"] = worst
         if not add:
