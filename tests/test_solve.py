@@ -99,11 +99,12 @@ def arm_raise():
 
 
 def test_arm_raise_5x_optimum(arm_raise):
-    """The packaged arm-raise at 5x: the README's gain (30.47 %) and optimum (659.07)."""
+    """The packaged arm-raise at 5x: the README's gain (30.47 %) and optimum; since the tube holds on
+    the 1 kHz grid (the arm's exchange, 1a2aa4e) the optimum is 659.0854 (659.0716 on the grid alone)."""
     r = arm_raise[2]
     assert r.success and r.tube.spec == "5x"
     assert abs(r.gain_pct - 30.47) <= 0.05
-    assert abs(r.cost - 659.0716) <= 1e-3 and abs(r.cost_initial - 947.9065) <= 1e-3
+    assert abs(r.cost - 659.0854) <= 1e-3 and abs(r.cost_initial - 947.9065) <= 1e-3
 
 
 def test_tube_just_above_initial_keeps_the_training_path(arm_raise):
