@@ -71,6 +71,13 @@ def _parser() -> argparse.ArgumentParser:
     sp.add_argument("--latent-dim", type=int, default=None)
     sp.add_argument("--out", type=Path, default=None)
 
+    r = sub.add_parser("reproduce", help="the paper's Tables 2, 3, 4, 6 and Fig. 5, ours beside the paper's")
+    r.add_argument("--quick", action="store_true", help="the arm's tables and Fig. 5 only (no OMPL, no jump)")
+    r.add_argument("--budgets", nargs="*", type=float, default=[10.0, 60.0, 300.0],
+                   help="the sampling baseline's cumulative wall budgets, s")
+    r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md")
+    r.add_argument("--quiet", action="store_true", help="no progress display")
+
     b = sub.add_parser("bench", help="run latentoc.benchmarks.<NAME>_bench")
     b.add_argument("name")
     b.add_argument("rest", nargs=argparse.REMAINDER)
@@ -237,6 +244,17 @@ def _cmd_start_poses(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from .reproduce import report, reproduce
+    from .results import atomic_write
+
+    text = report(reproduce(quick=args.quick, budgets=args.budgets))
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(args.out, lambda f: f.write(text))
+    print(f"wrote {args.out}")
+    return 0
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     name = args.name.replace("-", "_")
     try:
@@ -255,6 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
     commands = {"list": _cmd_list, "show": _cmd_show, "solve": _cmd_solve, "sweep": _cmd_sweep,
+                "reproduce": _cmd_reproduce,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:
         return commands[args.command](args)
