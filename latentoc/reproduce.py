@@ -83,7 +83,7 @@ def environment() -> dict[str, str]:
         pass
     return {"date": datetime.date.today().isoformat(), "cpu": cpu, "python": platform.python_version(),
             "latentoc": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
-            "casadi": casadi.__version__, "pinocchio": str(getattr(pinocchio, "__version__", "?"))}
+            "casadi": str(getattr(casadi, "__version__", "?")), "pinocchio": str(getattr(pinocchio, "__version__", "?"))}
 
 
 @dataclass
