@@ -67,6 +67,32 @@ def cmu_configurations(model: pin.Model | None = None, frames=None) -> np.ndarra
     return motion_to_q(model, cmu_skeleton(), cmu_motion(), frames)
 
 
+def skeleton_chain(asf: str | Path, bones: list[str], mass: float = 63.86, height: float = 1.75) -> pin.Model:
+    """A fixed-base chain of ``bones`` of the ASF skeleton at ``asf`` (the first bone's parent is the
+    world), de Leva masses of a subject of ``mass`` kg and ``height`` m, joints ``<bone>_<dof>`` as
+    in the CMU humanoid; a :class:`~latentoc.robots.RobotFileError` if the file or a bone is wrong."""
+    from .mocap.anthropometry import BONE_MAP
+    from .robots import RobotFileError
+
+    path = Path(asf)
+    if not path.is_file():
+        raise RobotFileError(f"skeleton {path} does not exist")
+    skeleton = read_asf(path)
+    unknown = [b for b in bones if b not in skeleton.bones]
+    if unknown:
+        raise RobotFileError(f"skeleton {path}: no bone {', '.join(map(repr, unknown))}; it has "
+                             f"{', '.join(skeleton.bones)}")
+    no_mass = [b for b in bones if b not in BONE_MAP]
+    if no_mass:
+        raise RobotFileError(f"skeleton {path}: bone {', '.join(map(repr, no_mass))} has no de Leva segment "
+                             f"(CMU bone names: {', '.join(sorted(b for b in BONE_MAP if b != 'root'))})")
+    _, inertias = cmu_inertias(skeleton, mass, height, bones=list(bones))
+    model = build_model(skeleton, inertias=inertias, bones=list(bones), fixed_base=True, name=path.stem)
+    if model.nv == 0:
+        raise RobotFileError(f"skeleton {path}: the bones {', '.join(bones)} have no degrees of freedom")
+    return model
+
+
 def build_human_arm() -> pin.Model:
     """The fixed-base 7-DOF human arm of Sect. 4.1 (see :mod:`latentoc.human_arm`)."""
     from .human_arm import build_arm

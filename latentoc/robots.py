@@ -1,27 +1,44 @@
-"""Robot models by name: example-robot-data URDFs and latentoc's own human models.
+"""Robot models by name: example-robot-data URDFs and latentoc's own human models; or the user's own.
 
 ``load_robot("panda")`` finds the URDF inside the installed ``example-robot-data`` wheel
 (``cmeel.prefix/share/example-robot-data/robots``) and builds a ``pinocchio.Model``,
 with a free-flyer root for legged robots. ``cmu-humanoid`` and ``human-arm`` are built
 from the CMU skeleton shipped in ``robots/cmu``.
+
+A problem file's ``robot`` is such a name or a table naming the user's own model
+(:data:`ROBOT`, :func:`robot_from_setting`), its paths relative to the problem file::
+
+    robot = { urdf = "arm.urdf", free_flyer = false, package_dirs = ["."] }
+    robot = { asf = "subject.asf", bones = ["lhumerus", "lradius"], mass = 70.0, height = 1.8 }
+
+Only the URDF's kinematic and inertial tags are read (no meshes), so mesh-less URDFs work;
+``package_dirs`` resolve a ``package://`` URDF path. An ASF skeleton becomes a fixed-base chain
+of the listed bones with de Leva masses, as the CMU humanoid is built (:mod:`latentoc.mocap`).
 """
 
 from __future__ import annotations
 
 import sys
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Sequence
 
 import pinocchio
 
 from .errors import LatentocError
+from .schema import Check
 
-__all__ = ["load_robot", "robot_names", "example_robot_data_dir", "UnknownRobotError"]
+__all__ = ["load_robot", "robot_names", "example_robot_data_dir", "UnknownRobotError", "RobotFileError", "ROBOT",
+           "load_urdf", "robot_from_setting", "robot_files", "describe_robot"]
 
 
 class UnknownRobotError(LatentocError, LookupError):
     """A robot name latentoc does not know."""
+
+
+class RobotFileError(LatentocError, ValueError):
+    """A robot file that does not exist or cannot be read (URDF, ASF skeleton)."""
 
 
 @dataclass(frozen=True)
@@ -116,3 +133,108 @@ def load_robot(name: str, free_flyer: bool | None = None) -> pinocchio.Model:
         model = pinocchio.buildModelFromUrdf(str(urdf))
     model.name = name
     return model
+
+
+def _package_path(text: str, package_dirs: list[Path]) -> Path:
+    """A ``package://name/rest`` path found under one of ``package_dirs``, else the path itself."""
+    if not text.startswith("package://"):
+        return Path(text)
+    rest = text[len("package://"):]
+    for d in package_dirs:
+        if (d / rest).is_file():
+            return d / rest
+    raise RobotFileError(f"URDF {text}: not found under the package_dirs {', '.join(map(str, package_dirs)) or '[]'}")
+
+
+def load_urdf(path: str | Path, free_flyer: bool = False,
+              package_dirs: Sequence[str | Path] = ()) -> pinocchio.Model:
+    """A ``pinocchio.Model`` of the URDF at ``path`` (kinematics and inertias only, no meshes);
+    a :class:`RobotFileError` naming the file if it does not exist or does not parse."""
+    dirs = [Path(d) for d in package_dirs]
+    urdf = _package_path(str(path), dirs)
+    if not urdf.is_file():
+        raise RobotFileError(f"URDF {urdf} does not exist")
+    try:  # a readable message (urdfdom's is only "does not contain a valid URDF model")
+        root = ET.parse(urdf).getroot()
+    except ET.ParseError as exc:
+        raise RobotFileError(f"URDF {urdf} is not valid XML: {exc}") from None
+    except OSError as exc:
+        raise RobotFileError(f"URDF {urdf} cannot be read: {exc}") from None
+    if root.tag != "robot":
+        raise RobotFileError(f"URDF {urdf}: the root element is <{root.tag}>, a URDF's is <robot>")
+    try:
+        if free_flyer:
+            model = pinocchio.buildModelFromUrdf(str(urdf), pinocchio.JointModelFreeFlyer())
+        else:
+            model = pinocchio.buildModelFromUrdf(str(urdf))
+    except (ValueError, RuntimeError) as exc:
+        raise RobotFileError(f"URDF {urdf} does not parse: {exc}") from None
+    if model.nv == 0:
+        raise RobotFileError(f"URDF {urdf} has no movable joint")
+    model.name = model.name or urdf.stem
+    return model
+
+
+def _robot_table(value: Any) -> str | dict[str, Any]:
+    """The ``robot`` setting normalised: a known name, or a urdf / asf table with every key."""
+    if isinstance(value, str):
+        if value not in robot_names():
+            raise ValueError
+        return value
+    if not isinstance(value, dict):
+        raise ValueError
+    if "urdf" in value:
+        allowed = {"urdf", "free_flyer", "package_dirs"}
+        out = {"urdf": value["urdf"], "free_flyer": value.get("free_flyer", False),
+               "package_dirs": list(value.get("package_dirs", []))}
+        ok = isinstance(out["urdf"], str) and out["urdf"] and isinstance(out["free_flyer"], bool) \
+            and all(isinstance(d, str) for d in out["package_dirs"])
+    elif "asf" in value:
+        allowed = {"asf", "bones", "mass", "height"}
+        out = {"asf": value["asf"], "bones": list(value.get("bones", [])), "mass": value.get("mass", 63.86),
+               "height": value.get("height", 1.75)}
+        ok = isinstance(out["asf"], str) and out["asf"] and len(out["bones"]) > 0 \
+            and all(isinstance(b, str) for b in out["bones"]) \
+            and all(isinstance(out[k], (int, float)) and not isinstance(out[k], bool) and out[k] > 0
+                    for k in ("mass", "height"))
+    else:
+        ok, allowed, out = False, set(), {}
+    if not ok or set(value) - allowed:
+        raise ValueError
+    return out
+
+
+#: the check of a problem file's ``robot``: a name, or a table naming a URDF or an ASF skeleton
+ROBOT = Check(_robot_table, f"one of {', '.join(map(repr, robot_names()))}, "
+                            '{ urdf = "path", free_flyer = false, package_dirs = [...] } '
+                            'or { asf = "path", bones = [...], mass = kg, height = m }')
+
+
+def robot_files(setting: str | dict[str, Any], base_dir: Path) -> list[Path]:
+    """The files a ``robot`` setting names, resolved against ``base_dir`` (none for a name)."""
+    if isinstance(setting, str):
+        return []
+    key = "urdf" if "urdf" in setting else "asf"
+    if setting[key].startswith("package://"):
+        return []
+    return [base_dir / setting[key]]
+
+
+def describe_robot(setting: str | dict[str, Any]) -> str:
+    """A short name of a ``robot`` setting for messages: the name, or the file's."""
+    if isinstance(setting, str):
+        return setting
+    return setting.get("urdf") or setting["asf"]
+
+
+def robot_from_setting(setting: str | dict[str, Any], base_dir: str | Path = ".") -> pinocchio.Model:
+    """The model a ``robot`` setting (:data:`ROBOT`) names, its paths relative to ``base_dir``."""
+    base = Path(base_dir)
+    if isinstance(setting, str):
+        return load_robot(setting)
+    if "urdf" in setting:
+        return load_urdf(base / setting["urdf"] if not setting["urdf"].startswith("package://") else setting["urdf"],
+                         setting["free_flyer"], [base / d for d in setting["package_dirs"]])
+    from .human_models import skeleton_chain
+
+    return skeleton_chain(base / setting["asf"], setting["bones"], setting["mass"], setting["height"])

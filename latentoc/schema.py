@@ -204,6 +204,8 @@ class Schema:
             entry = self._by_key.get(key)
             if isinstance(entry, Table):
                 given[entry.name] = entry.parse(value, where)
+            elif isinstance(entry, Setting):  # its value may be a table too (robot = { urdf = ... })
+                given[entry.name] = _checked(entry, value, f"{where}: key '{key}'")
             elif isinstance(value, Mapping):
                 if key not in tables or key == "":
                     raise ProblemError(f"{where}: unknown table [{key}]; a {self.kind} problem has the tables "
@@ -214,8 +216,6 @@ class Schema:
                         raise ProblemError(f"{where}: unknown key '{key}.{sub}'; [{key}] of a {self.kind} problem "
                                            f"allows: {', '.join(sorted(tables[key]))}")
                     given[s.name] = _checked(s, v, f"{where}: key '{key}.{sub}'")
-            elif isinstance(entry, Setting):
-                given[entry.name] = _checked(entry, value, f"{where}: key '{key}'")
             else:
                 raise ProblemError(f"{where}: unknown key '{key}'; a {self.kind} problem allows the top-level keys "
                                    f"{', '.join(sorted([*ignore, *tables.get('', [])]))}")
