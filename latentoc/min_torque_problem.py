@@ -13,12 +13,18 @@ guess is infeasible (Ipopt restores feasibility first). The smallest feasible de
 the fixed end points. ``tube_relative`` = delta / noise variance (1/beta_3) compares sweeps across
 problems. The measured GPDM settings of arm-raise are in ``problems/arm-raise.toml`` and
 docs/arm-raise.md.
+
+``robot`` and ``training`` are registered names or the user's own files (:mod:`latentoc.problem_inputs`):
+any fixed-base robot, its motion read from CSV, NPZ or ASF + AMC; the robot is reduced to the
+joints the motion moves. ``[objective]`` chooses the running cost (:mod:`latentoc.kinds.objectives`),
+``[transcription]`` switches the joint, velocity and torque limits (:mod:`latentoc.kinds.limits`)
+and ``[goal]`` adds an end-effector goal (:mod:`latentoc.kinds.goal`).
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import time
-from collections.abc import Callable
 from dataclasses import fields
 from typing import Any
 
@@ -28,14 +34,18 @@ import pinocchio as pin
 from .dynamics import SymbolicModel
 from .errors import ProblemError, SolveError
 from .gpdm import GPDM, GPDMSettings, learn_gpdm
+from .kinds.goal import goal_error
 from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp,
                                latent_nlp, sampled_motion, violated_times)
+from .kinds.objectives import OBJECTIVES, Objective
 from .latent import GPLayer
 from .nlp import ipopt
 from .nlp.ipopt import HESSIANS, IpoptResult
+from .motions import TRAINING, TRAINING_MOTIONS, Demonstration, check_frames
 from .problem import TUBE, Problem
-from .robots import load_robot, robot_names
-from .schema import Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
+from .problem_inputs import check_problem_files, problem_demonstration, require_fixed_base
+from .robots import ROBOT, describe_robot
+from .schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
 from .solve import SOLVERS, Solution, resolve_tube
 from .spline_path import SplinePath, fixed_rows, trapezoid_cost
 
@@ -45,21 +55,16 @@ __all__ = ["SCHEMA", "TRAINING_MOTIONS", "training_motion", "problem_gpdm", "gpd
 TRAJECTORY_RATE_HZ = 1000.0
 
 
-def _arm_trial() -> tuple[np.ndarray, np.ndarray]:
-    from .human_models import arm_training_motion
-    return arm_training_motion()
+def _torque_limits(v: object) -> str | list[float]:
+    if v == "urdf":
+        return "urdf"
+    return list_of(number(0, lo_open=True)).convert(v)
 
 
-def _broad_jump() -> tuple[np.ndarray, np.ndarray]:
-    from .human_models import broad_jump_training_motion
-    return broad_jump_training_motion()
-
-
-#: Named training motions: name -> () -> (t [N], Q [N x nq]).
-TRAINING_MOTIONS: dict[str, Callable[[], tuple[np.ndarray, np.ndarray]]] = {
-    "human-arm-trial": _arm_trial,
-    "cmu-broad-jump": _broad_jump,
-}
+def _position(v: object) -> list[float]:
+    if not isinstance(v, (list, tuple)) or len(v) != 3:
+        raise ValueError
+    return [number().convert(x) for x in v]
 
 
 _GPDM_DEFAULTS = GPDMSettings()
@@ -73,9 +78,14 @@ _SPLINE = MinTorqueSettings(duration=1.0)  # the transcription's defaults
 
 #: the keys of a latent-min-torque problem file
 SCHEMA = Schema("latent-min-torque", (
-    Setting("robot", "robot", choice(*robot_names()), doc="a latentoc.load_robot name"),
-    Setting("training", "training", choice(*TRAINING_MOTIONS), doc="the training motion"),
-    Setting("duration", "duration", number(0, lo_open=True), doc="s (Table 1)"),
+    Setting("robot", "robot", ROBOT, doc="a latentoc.load_robot name or a table naming a URDF (or an ASF skeleton)"),
+    Setting("training", "training", TRAINING, doc="a registered motion or a table naming a CSV, NPZ or AMC file"),
+    Setting("duration", "duration", optional(number(0, lo_open=True)), None,
+            "s (Table 1); none: the training motion's"),
+    Setting("objective.cost", "objective", choice(*OBJECTIVES), "torque",
+            '"torque": |tau|^2 (Eq. 22); "energy": sqrt((tau . qdot)^2 + eps^2) - eps; "acceleration": |qddot|^2'),
+    Setting("objective.energy_epsilon", "energy_epsilon", number(0, lo_open=True), Objective.epsilon,
+            "W: smoothing of |tau . qdot| in the energy cost"),
     Setting("latent.dim", "latent_dim", integer(1), 3, "latent dimension d"),
     Setting("latent.control_points", "control_points", integer(2), _SPLINE.control_points, "spline control points m"),
     Setting("latent.spline_degree", "spline_degree", integer(1), _SPLINE.spline_degree, "B-spline degree"),
@@ -88,8 +98,15 @@ SCHEMA = Schema("latent-min-torque", (
             "tube and joint-limit nodes per knot interval"),
     Setting("transcription.joint_limits", "joint_limits", boolean(), _SPLINE.joint_limits,
             "the model's joint limits on the constraint grid"),
-    Setting("transcription.torque_limits", "torque_limits", list_of(number(0, lo_open=True)), [],
-            "N m: [] none, [s] every joint |tau| <= s, or one per joint"),
+    Setting("transcription.torque_limits", "torque_limits",
+            Check(_torque_limits, 'a list of positive numbers or "urdf"'), [],
+            'N m: [] none, [s] every joint |tau| <= s, one per joint, or "urdf" (its effort limits)'),
+    Setting("transcription.velocity_limits", "velocity_limits", boolean(), False,
+            "|qdot| <= the model's velocity limits on the constraint grid"),
+    Setting("goal.frame", "goal_frame", optional(text()), None,
+            "end-effector goal: this frame's position at t = T (none: the demonstration's end pose)"),
+    Setting("goal.position", "goal_position", optional(Check(_position, "3 numbers")), None, "m, world frame"),
+    Setting("goal.tolerance", "goal_tolerance", number(0), 0.0, "m: 0 holds the position exactly"),
     Setting("solver.hessian", "hessian", choice(*HESSIANS), "exact", "Ipopt's Hessian"),
     Setting("solver.max_iter", "max_iter", integer(1), 300, "Ipopt iterations"),
     Setting("solver.tol", "tol", number(0, lo_open=True), 1e-8, "Ipopt tolerance"),
@@ -110,7 +127,11 @@ SCHEMA = Schema("latent-min-torque", (
 
 
 def check_problem(problem: Problem, where: str) -> None:
-    """Checks across settings: enough control points for the degree and the boundary."""
+    """Checks across settings: enough control points for the degree and the boundary, a goal's
+    position with its frame, and the files the robot and the training motion name."""
+    if (problem.goal_frame is None) != (problem.goal_position is None):
+        raise ProblemError(f"{where}: [goal] needs both 'goal.frame' and 'goal.position'")
+    check_problem_files(problem, where)
     m, k = problem.control_points, problem.spline_degree
     if m < k + 1:
         raise ProblemError(f"{where}: key 'latent.control_points' = {m} is fewer than spline_degree + 1 = {k + 1}")
@@ -120,9 +141,10 @@ def check_problem(problem: Problem, where: str) -> None:
                            f"{n_fixed}, so at least {n_fixed + 1} are needed to leave one free")
 
 
-def training_motion(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+def training_motion(problem: Problem, demo: Demonstration | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The problem's training motion (t, Q), subsampled by ``gpdm.training_stride``."""
-    t, Q = TRAINING_MOTIONS[problem.training]()
+    demo = problem_demonstration(problem) if demo is None else demo
+    t, Q = demo.t, demo.Q
     idx = np.arange(0, len(t), problem.gpdm["training_stride"])
     if idx[-1] != len(t) - 1:
         idx = np.append(idx, len(t) - 1)  # keep the goal pose
@@ -141,9 +163,10 @@ _GPDM_CACHE: dict[str, tuple[GPDM, float]] = {}  # learned once per process and 
 def problem_gpdm(problem: Problem) -> tuple[GPDM, float]:
     """The problem's GPDM and its learning time (s); learned once per training data + settings."""
     settings = gpdm_settings(problem)
-    key = json.dumps([problem.training, problem.gpdm["training_stride"], settings.to_json()])
+    _, Q = training_motion(problem)
+    digest = hashlib.sha256(np.ascontiguousarray(Q).tobytes()).hexdigest()
+    key = json.dumps([digest, Q.shape, settings.to_json()])
     if key not in _GPDM_CACHE:
-        _, Q = training_motion(problem)
         t0 = time.perf_counter()
         model = learn_gpdm(Q, settings)
         _GPDM_CACHE[key] = (model, time.perf_counter() - t0)
@@ -172,24 +195,49 @@ def _finish(result: dict[str, Any], nlp: MinTorqueNLP, res: IpoptResult, cost_in
         "status": res.status, "success": bool(res.success), "iterations": res.iterations,
         "cost_initial": cost_initial, "cost": res.f,
         "performance_gain_pct": 100.0 * (cost_initial - res.f) / cost_initial,
-        "cost_meaning": "integral of |tau|^2 dt, N^2 m^2 s (minimised, Eq. 22)",
+        "cost_meaning": nlp.objective.meaning,
         "cost_trapezoid_1ms": cost_fine, "cost_initial_trapezoid_1ms": trapezoid_cost(motion_init_L, dt),
         "quadrature_error": abs(res.f - cost_fine) / abs(cost_fine),
         "solve_time_s": res.time_s, "n_variables": int(nlp.w0.size), "n_constraints": int(nlp.lbg.size),
     })
 
 
-def _limit_violations(problem: Problem, robot: pin.Model, motion: dict[str, np.ndarray]) -> dict[str, float]:
-    """How far the 1 kHz motion leaves the problem's joint limits (rad) and torque limits (N m)."""
-    out = {}
-    if problem.joint_limits:
-        q = motion["q"]
-        out["joint_limits_rad"] = float(max(0.0, np.max(robot.lowerPositionLimit - q),
-                                            np.max(q - robot.upperPositionLimit)))
-    if problem.torque_limits:
-        limit = np.broadcast_to(np.asarray(problem.torque_limits, dtype=float), motion["tau"].shape[1:])
-        out["torque_limits_nm"] = float(max(0.0, np.max(np.abs(motion["tau"]) - limit)))
+def _limit_violations(settings: MinTorqueSettings, robot: pin.Model, motion: dict[str, np.ndarray]) -> dict[str, float]:
+    """How far the 1 kHz motion leaves the joint (rad), velocity (rad/s) and torque limits (N m) and,
+    with a goal, its position (m beyond the tolerance)."""
+    out = settings.limits(robot).violations(motion)
+    if settings.goal is not None:
+        out["goal_m"] = max(0.0, goal_error(robot, settings.goal, motion["q"][-1]) - settings.goal.tolerance)
     return out
+
+
+def _own_motion(problem: Problem, demo: Demonstration, settings: MinTorqueSettings, q: np.ndarray) -> dict:
+    """The result's facts about the robot, the demonstration (and how far the motion's end poses q[0],
+    q[-1] are from its first and last frames), the objective and the goal."""
+    out = {"robot": describe_robot(problem.robot), "demonstration": demo.info(), "objective": settings.objective.name,
+           "boundary_error_rad": {"start": float(np.max(np.abs(q[0] - demo.Q[0]))),
+                                  "end": float(np.max(np.abs(q[-1] - demo.Q[-1])))}}
+    if settings.goal is not None:
+        out["goal"] = {"frame": settings.goal.frame, "position": list(settings.goal.position),
+                       "tolerance": settings.goal.tolerance}
+    return out
+
+
+def _setup(problem: Problem, method: str) -> tuple[Demonstration, pin.Model, SymbolicModel, MinTorqueSettings]:
+    """The demonstration, its (reduced) robot, the symbolic model and the transcription settings;
+    a SolveError for a robot the kind cannot solve, an unknown goal frame or a bad limit list."""
+    demo = problem_demonstration(problem)
+    robot = demo.model
+    require_fixed_base(robot, problem.robot, "latent-min-torque")
+    settings = MinTorqueSettings.from_problem(problem, duration=demo.duration)
+    if settings.goal is not None and not robot.existFrame(settings.goal.frame):
+        raise SolveError(f"goal frame {settings.goal.frame!r} is not a frame of {describe_robot(problem.robot)}; "
+                         f"its frames: {', '.join(f.name for f in robot.frames)}")
+    try:
+        settings.limits(robot)
+    except ValueError as exc:
+        raise SolveError(str(exc)) from None
+    return demo, robot, SymbolicModel(robot), settings
 
 
 def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, x0: np.ndarray, verbose: bool) -> IpoptResult:
@@ -214,11 +262,11 @@ def _solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild, x0: np.ndarra
         if not res.success or len(rounds) >= EXCHANGE_ROUNDS:
             break
         P = nlp.control_points(res.x)
-        motion = sampled_motion(nlp.layer, sym.model, nlp.path.spline, P, t)
+        motion = sampled_motion(nlp.layer, sym.model, nlp.path.spline, P, t, nlp.objective)
         layer = nlp.layer
         sigma2 = layer.variance(nlp.path.spline.evaluate(P, t))[0] \
             if isinstance(layer, GPLayer) and nlp.tube is not None else None
-        add, worst = violated_times(nlp, motion, sigma2, t, sym, problem.torque_limits, problem.joint_limits)
+        add, worst = violated_times(nlp, motion, sigma2, t)
         entry["violation_1khz"] = worst
         if not add:
             break
@@ -237,16 +285,17 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
     cost_initial and the gain still refer to the training fit."""
     if method not in METHODS:
         raise SolveError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    robot = load_robot(problem.robot)
-    sym = SymbolicModel(robot)
+    demo, robot, sym, settings = _setup(problem, method)
     if method == "joint-range":
-        return _solve_joint_range(problem, robot, sym, joint_range_deg, verbose)
+        return _solve_joint_range(problem, demo, sym, settings, joint_range_deg, verbose)
 
-    t_train, Q_train = training_motion(problem)
+    t_train, Q_train = training_motion(problem, demo)
     d = problem.latent_dim if gpdm is None else gpdm.latent_dim
     if not 1 <= d < Q_train.shape[1]:
         raise SolveError(f"latent dimension d = {d} must satisfy 1 <= d < D = {Q_train.shape[1]} "
                          "(the training data's dimension)")
+    if gpdm is None:
+        check_frames(demo, d, problem.gpdm["training_stride"])
     if gpdm is not None and gpdm.X.shape[0] != len(t_train):
         raise SolveError(f"the given GPDM has {gpdm.X.shape[0]} latent points, the problem's training motion "
                          f"has {len(t_train)} frames")
@@ -254,8 +303,7 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
     gp = problem_gpdm(problem)[0] if gpdm is None else gpdm
     gpdm_time = time.perf_counter() - t0
 
-    settings = MinTorqueSettings.from_problem(problem)
-    t = _time_grid(problem.duration)
+    t = _time_grid(settings.duration)
     spline = settings.spline()
     path = SplinePath.fit(spline, t_train, gp.latent_trajectories()[0], problem.boundary)
     P0 = path.P_init
@@ -277,14 +325,14 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
     nlp = latent_nlp(gp, sym, settings, delta, path)
     cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t1
-    x_start = nlp.w0 if initial_guess is None else path.decision_vector(initial_guess)
+    x_start = nlp.w0 if initial_guess is None else nlp.path.decision_vector(initial_guess)
     nlp, res, rounds = _solve_exchanged(problem, nlp, lambda extra: latent_nlp(gp, sym, settings, delta, path,
                                                                                extra=extra), x_start, sym, t, verbose)
 
     P = nlp.control_points(res.x)
     x = spline.evaluate(P, t)
-    motion = sampled_motion(nlp.layer, robot, spline, P, t)
-    init = sampled_motion(nlp.layer, robot, spline, P0, t)
+    motion = sampled_motion(nlp.layer, robot, spline, P, t, settings.objective)
+    init = sampled_motion(nlp.layer, robot, spline, P0, t, settings.objective)
     sigma2 = gp.variance(x)
     result = _base_result(problem, "latent")
     result.update({"latent_dim": int(d), "n_training_frames": int(len(t_train)),
@@ -293,9 +341,9 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
                    "tube_initial": float(np.max(gp.variance(x0))), "max_sigma2": float(np.max(sigma2)),
                    "max_tube_violation": max(0.0, float(np.max(sigma2)) - delta),
                    "violations": {"tube": max(0.0, float(np.max(sigma2)) - delta),
-                                  **_limit_violations(problem, robot, motion)},
+                                  **_limit_violations(settings, robot, motion)},
                    "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None,
-                   "exchange_rounds": rounds})
+                   "exchange_rounds": rounds, **_own_motion(problem, demo, settings, motion["q"])})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     result["iterations"] = sum(r["iterations"] for r in rounds)
     result["solve_time_s"] = sum(r["time_s"] for r in rounds)
@@ -306,14 +354,13 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
                     gpdm=gp)
 
 
-def _solve_joint_range(problem: Problem, robot: pin.Model, sym: SymbolicModel, joint_range_deg: float | None,
-                       verbose: bool) -> Solution:
+def _solve_joint_range(problem: Problem, demo: Demonstration, sym: SymbolicModel, settings: MinTorqueSettings,
+                       joint_range_deg: float | None, verbose: bool) -> Solution:
     k = problem.joint_range_deg if joint_range_deg is None else joint_range_deg
     if isinstance(k, bool) or not isinstance(k, (int, float, np.floating)) or not np.isfinite(k) or k <= 0:
         raise SolveError(f"joint range must be a positive number of degrees, got {k!r}")
-    t_train, Q_train = TRAINING_MOTIONS[problem.training]()  # all frames: no GPDM here
-    settings = MinTorqueSettings.from_problem(problem)
-    t = _time_grid(problem.duration)
+    t_train, Q_train, robot = demo.t, demo.Q, demo.model  # all frames: no GPDM here
+    t = _time_grid(settings.duration)
     t0 = time.perf_counter()
     nlp = joint_range_nlp(sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k))
     cost_initial = nlp.cost(nlp.w0)
@@ -321,12 +368,13 @@ def _solve_joint_range(problem: Problem, robot: pin.Model, sym: SymbolicModel, j
     nlp, res, rounds = _solve_exchanged(problem, nlp, lambda extra: joint_range_nlp(
         sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k), extra=extra), nlp.w0, sym, t, verbose)
     P, P0, spline = nlp.control_points(res.x), nlp.path.P_init, nlp.path.spline
-    motion = sampled_motion(nlp.layer, robot, spline, P, t)
-    init = sampled_motion(nlp.layer, robot, spline, P0, t)
+    motion = sampled_motion(nlp.layer, robot, spline, P, t, settings.objective)
+    init = sampled_motion(nlp.layer, robot, spline, P0, t, settings.objective)
     result = _base_result(problem, "joint-range")
     result.update({"joint_range_deg": float(k), "n_training_frames": int(len(t_train)),
                    "build_time_s": build_time, "gpdm_time_s": 0.0, "warm_start": False,
-                   "violations": _limit_violations(problem, robot, motion), "exchange_rounds": rounds})
+                   "violations": _limit_violations(settings, robot, motion), "exchange_rounds": rounds,
+                   **_own_motion(problem, demo, settings, motion["q"])})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     result["iterations"] = sum(r["iterations"] for r in rounds)
     result["solve_time_s"] = sum(r["time_s"] for r in rounds)

@@ -48,8 +48,8 @@ def _edited(tmp_path, name, old, new):
 @pytest.mark.parametrize("name, edit, match", [
     ("arm-raise-small", ("[solver]", "[solver]\nbogus = 1"),
      r"unknown key 'solver.bogus'; \[solver\] of a latent-min-torque problem allows: hessian, max_iter, tol"),
-    ("arm-raise-small", ("duration = 2.9", 'duration = "long"'), "key 'duration' must be a number > 0, got 'long'"),
-    ("arm-raise-small", ("duration = 2.9", "duration = 0"), "key 'duration' must be a number > 0, got 0"),
+    ("arm-raise-small", ("duration = 2.9", 'duration = "long"'), "key 'duration' must be a number > 0, or none, got 'long'"),
+    ("arm-raise-small", ("duration = 2.9", "duration = 0"), "key 'duration' must be a number > 0, or none, got 0"),
     ("arm-raise-small", ('robot = "human-arm"', 'robot = "r2d2"'), "key 'robot' must be one of .*'panda'.*got 'r2d2'"),
     ("arm-raise-small", ('training = "human-arm-trial"', 'training = "dance"'), "key 'training' must be one of"),
     ("arm-raise-small", ('hessian = "exact"', 'hessian = "bfgs"'), "key 'solver.hessian' must be one of 'exact', "
@@ -60,7 +60,7 @@ def _edited(tmp_path, name, old, new):
     ("arm-raise-small", ('tube = "5x"', "tube = -1.0"), "key 'latent.tube' must be a positive number or a relative"),
     ("arm-raise-small", ("[gpdm]", "[gpdm]\nfoo = 2"), r"unknown key 'gpdm.foo'; \[gpdm\] allows: balanced, "),
     ("arm-raise-small", ("[gpdm]", "[gpdm]\nbalanced = 1"), "key 'gpdm.balanced' must be true or false, got 1"),
-    ("arm-raise-small", ("[gpdm]", "[extras]\na = 1\n[gpdm]"), r"unknown table \[extras\]; .* \[baseline\], \[gpdm\]"),
+    ("arm-raise-small", ("[gpdm]", "[extras]\na = 1\n[gpdm]"), r"unknown table \[extras\]; .* \[baseline\], \[goal\], \[gpdm\]"),
     ("arm-raise-small", ('name = "arm-raise-small"', 'seed = 0'), "unknown key 'seed'; .* top-level keys description, duration, "
                                                        "kind, name, robot, training"),
     ("arm-raise-small", ('kind = "latent-min-torque"', 'kind = "dance"'), "unknown kind 'dance'; known: broad-jump"),

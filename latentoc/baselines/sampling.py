@@ -114,7 +114,7 @@ class ArmTask:
             lo, hi = Q.min(0) - math.pi / 2, Q.max(0) + math.pi / 2
         return cls(model=model, duration=float(problem.duration), q_start=Q[0].copy(), q_goal=Q[-1].copy(),
                    q_lower=lo, q_upper=hi, v_bound=np.maximum(velocity_factor * vmax, 0.1),
-                   tau_max=torque_limit_vector(problem.torque_limits, model.nv),
+                   tau_max=torque_limit_vector(problem.torque_limits, model),
                    joint_limits=bool(problem.joint_limits))
 
 

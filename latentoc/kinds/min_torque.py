@@ -2,7 +2,8 @@
 
 The objective is J = int_0^T |tau|^2 dt (Eq. 22 with the minimum-torque L of Sect. 4.1) by
 Gauss-Legendre quadrature, J = sum_k w_k |tau_k|^2, where tau_k = RNEA(y, yd, ydd) (Eq. 1-2) of
-the joint motion at node k. Two methods give the joint motion along a spline path
+the joint motion at node k; or another running cost L of :mod:`latentoc.kinds.objectives`
+(mechanical energy, acceleration). Two methods give the joint motion along a spline path
 (:mod:`latentoc.spline_path`):
 
 * ``"latent"``: the path is the latent spline x(t) (Eq. 20, 23-25) and the joint motion the
@@ -12,18 +13,18 @@ the joint motion at node k. Two methods give the joint motion along a spline pat
   the full configuration-space baseline of Sect. 4.1.1; each free control point stays within
   +-k degrees of its value in the fit of the training motion (Table 2, "joint range").
 
-Both hold the joint limits on the constraint grid and, if the problem gives torque limits,
-|tau| <= limit at the quadrature nodes. Each nonlinear row family is one robot block
+Both hold the joint limits (and, if switched on, the velocity limits) on the constraint grid
+and, if the problem gives torque limits, |tau| <= limit at the quadrature nodes
+(:mod:`latentoc.kinds.limits`); an end-effector goal (:mod:`latentoc.kinds.goal`) frees the
+end point and holds a frame's position at t = T. Each nonlinear row family is one robot block
 (:mod:`latentoc.nlp.blocks`); with torque limits a single block gives (|tau|^2, tau), feeding
 both the objective and the torque rows, so RNEA runs once per node. The joint-range joint
 limits are linear in the decision vector (q = B0 P) and need no block.
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-import casadi as ca
 import numpy as np
 import pinocchio as pin
 import scipy.sparse as sp
@@ -32,12 +33,15 @@ from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
 from ..latent import GPLayer, IdentityLayer
 from ..nlp.assemble import Family, SparseNLP
-from ..nlp.blocks import RobotBlock, block_inputs
+from ..nlp.blocks import RobotBlock
 from ..nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
 from ..nlp.inputs import NodeInputs
 from ..problem import Problem
 from ..spline import BSpline
 from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
+from .goal import EndGoal, FreeEndPath, goal_family
+from .limits import Limits, torque_limit_vector
+from .objectives import Objective, velocity_block
 
 __all__ = ["METHODS", "MinTorqueSettings", "MinTorqueNLP", "Samples", "latent_nlp", "joint_range_nlp",
            "torque_block", "torque_limit_vector", "ipopt_options", "sampled_motion", "violated_times"]
@@ -61,16 +65,35 @@ class MinTorqueSettings:
     quadrature_points: int = 8
     constraint_points: int = 24
     joint_limits: bool = True
-    torque_limits: tuple[float, ...] = ()
+    torque_limits: tuple[float, ...] | str = ()  # or "urdf": the model's effort limits
+    velocity_limits: bool = False
+    objective: Objective = Objective()
+    goal: EndGoal | None = None
 
     @classmethod
-    def from_problem(cls, problem: Problem, control_points: int | None = None) -> "MinTorqueSettings":
-        """The settings a :class:`~latentoc.problem.Problem` declares (``control_points`` overrides m)."""
+    def from_problem(cls, problem: Problem, control_points: int | None = None,
+                     duration: float | None = None) -> "MinTorqueSettings":
+        """The settings a :class:`~latentoc.problem.Problem` declares (``control_points`` overrides m,
+        ``duration`` the problem's when it gives none)."""
         m = problem.control_points if control_points is None else control_points
-        return cls(duration=problem.duration, control_points=int(m), spline_degree=problem.spline_degree,
+        T = problem.duration if problem.duration is not None else duration
+        if T is None:
+            raise ValueError("the problem gives no duration: pass the training motion's")
+        goal = None
+        if problem.settings.get("goal_frame") is not None:
+            goal = EndGoal(problem.goal_frame, tuple(problem.goal_position), problem.goal_tolerance)
+        limits = problem.torque_limits
+        return cls(duration=float(T), control_points=int(m), spline_degree=problem.spline_degree,
                    boundary=problem.boundary, quadrature_points=problem.quadrature_points,
                    constraint_points=problem.constraint_points, joint_limits=problem.joint_limits,
-                   torque_limits=tuple(problem.torque_limits))
+                   torque_limits=limits if isinstance(limits, str) else tuple(limits),
+                   velocity_limits=problem.settings.get("velocity_limits", False),
+                   objective=Objective(problem.settings.get("objective", "torque"),
+                                       problem.settings.get("energy_epsilon", Objective.epsilon)), goal=goal)
+
+    def limits(self, model: pin.Model) -> Limits:
+        """The limits these settings switch on, from ``model``."""
+        return Limits.of(model, self.joint_limits, self.velocity_limits, self.torque_limits)
 
     def spline(self) -> BSpline:
         return BSpline(self.control_points, self.duration, self.spline_degree)
@@ -108,6 +131,8 @@ class MinTorqueNLP:
     rows: dict[str, slice] = field(default_factory=dict)  # constraint rows of each family
     extra: Samples = field(default_factory=lambda: Samples())  # the exchange's added times
     tube: float | None = None
+    limits: Limits = field(default_factory=Limits)
+    objective: Objective = field(default_factory=Objective)
 
     @property
     def w0(self) -> np.ndarray:
@@ -121,24 +146,9 @@ class MinTorqueNLP:
         return self.nlp.objective(np.asarray(w, dtype=float))
 
 
-def torque_limit_vector(torque_limits: Sequence[float], nv: int) -> np.ndarray | None:
-    """Per-joint torque bounds from the problem's list ([] none, [s] all, or nv values)."""
-    if len(torque_limits) == 0:
-        return None
-    if len(torque_limits) == 1:
-        return np.full(nv, float(torque_limits[0]))
-    if len(torque_limits) != nv:
-        raise ValueError(f"torque_limits has {len(torque_limits)} values, the model has {nv} joints")
-    return np.asarray(torque_limits, dtype=float)
-
-
 def torque_block(model: SymbolicModel, latent_dim: int, with_torques: bool = False) -> RobotBlock:
     """The block L = |tau|^2 (Eq. 22, tau = RNEA, Eq. 1-2); ``with_torques``: rows (L, tau)."""
-    y, yd, ydd, r = block_inputs(model.nv, 0)
-    tau = model.rnea(y, yd, ydd)
-    parts = {"L": ca.sumsqr(tau), "tau": tau} if with_torques else {"L": ca.sumsqr(tau)}
-    name = "min_torque_L_tau" if with_torques else "min_torque_L"
-    return RobotBlock.from_parts(name, (y, yd, ydd, r), parts, latent_dim)
+    return Objective("torque").block(model, latent_dim, with_torques)
 
 
 def _spline_inputs(path: SplinePath, t: np.ndarray, orders: int) -> tuple[sp.csr_matrix, np.ndarray]:
@@ -149,10 +159,10 @@ def _spline_inputs(path: SplinePath, t: np.ndarray, orders: int) -> tuple[sp.csr
 
 
 def _torque_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray, w: np.ndarray,
-                   tmax: np.ndarray | None) -> tuple[Family, np.ndarray, np.ndarray]:
+                   tmax: np.ndarray | None, objective: Objective) -> tuple[Family, np.ndarray, np.ndarray]:
     """The objective's family (cf = quadrature weights on L) and, with limits, the torque rows."""
     nv, K = model.nv, len(t)
-    block = torque_block(model, layer.latent_dim, with_torques=tmax is not None)
+    block = objective.block(model, layer.latent_dim, with_torques=tmax is not None)
     n_out = block.n_out
     cf = np.zeros((K, n_out))
     cf[:, 0] = w
@@ -176,6 +186,14 @@ def _joint_limit_family(layer: GPLayer | IdentityLayer, path: SplinePath, t: np.
     return Family("joint_limits", MeanEvaluator(layer), S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
 
 
+def _velocity_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray) -> Family:
+    """Rows yd(t_j) (node-major) for the velocity limits."""
+    S, s0 = _spline_inputs(path, t, 3)
+    block = velocity_block(model.nv, layer.latent_dim)
+    return Family("velocity_limits", BlockEvaluator(block, layer), S, s0,
+                  Cg=sp.identity(len(t) * model.nv, format="csr"))
+
+
 def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, settings: MinTorqueSettings,
            path: SplinePath, lbx: np.ndarray, ubx: np.ndarray, tube: float | None,
            extra: Samples | None = None) -> MinTorqueNLP:
@@ -185,8 +203,11 @@ def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, se
     spline = path.spline
     quad_t, quad_w = gauss_legendre_nodes(spline, settings.quadrature_points)
     grid_t = constraint_times(spline, settings.constraint_points)
+    if isinstance(path, FreeEndPath):  # the end point is free: the limits and the tube hold there too
+        grid_t = np.append(grid_t, spline.duration)
     extra = extra or Samples()
     grid_t = np.union1d(grid_t, extra.grid)
+    limits = settings.limits(model.model)
     Kg = len(grid_t)
     families, lbg, ubg = [], [], []
     if tube is not None:  # sigma^2(x(t_j)) / delta <= 1 (Eq. 29), relative so that Ipopt's tolerances are
@@ -194,24 +215,40 @@ def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, se
         families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(Kg, format="csr") / tube))
         lbg.append(np.full(Kg, -np.inf))
         ubg.append(np.ones(Kg))
-    if settings.joint_limits:
+    if limits.q_lo is not None and limits.q_hi is not None:
         families.append(_joint_limit_family(layer, path, grid_t))
-        lbg.append(np.tile(np.asarray(model.model.lowerPositionLimit, dtype=float), Kg))
-        ubg.append(np.tile(np.asarray(model.model.upperPositionLimit, dtype=float), Kg))
-    tmax = torque_limit_vector(settings.torque_limits, model.nv)
+        lbg.append(np.tile(limits.q_lo, Kg))
+        ubg.append(np.tile(limits.q_hi, Kg))
+    if limits.v_max is not None:
+        families.append(_velocity_family(model, layer, path, grid_t))
+        lbg.append(np.tile(-limits.v_max, Kg))
+        ubg.append(np.tile(limits.v_max, Kg))
+    tmax = limits.tau_max
     # torque rows also at the exchange's times, with no weight in the objective
     torque_t = np.concatenate([quad_t, extra.torque]) if tmax is not None else quad_t
     torque_w = np.concatenate([quad_w, np.zeros(len(torque_t) - len(quad_t))])
-    torque, lb, ub = _torque_family(model, layer, path, torque_t, torque_w, tmax)
+    torque, lb, ub = _torque_family(model, layer, path, torque_t, torque_w, tmax, settings.objective)
     families.append(torque)
     lbg.append(lb)
     ubg.append(ub)
+    if settings.goal is not None:
+        goal, lb, ub = goal_family(model, layer, path, settings.goal)
+        families.append(goal)
+        lbg.append(lb)
+        ubg.append(ub)
     nlp = SparseNLP(path.n_w, families)
     rows = {f.name: slice(nlp.row_offset[f.name], nlp.row_offset[f.name] + f.n_rows)
             for f in nlp.families if f.n_rows}
     return MinTorqueNLP(method=method, nlp=nlp, path=path, layer=layer, lbx=lbx, ubx=ubx,
                         lbg=np.concatenate(lbg), ubg=np.concatenate(ubg), quad_t=quad_t, quad_w=quad_w,
-                        grid_t=grid_t, rows=rows, extra=extra, tube=tube)
+                        grid_t=grid_t, rows=rows, extra=extra, tube=tube, limits=limits, objective=settings.objective)
+
+
+def _goal_path(path: SplinePath, settings: MinTorqueSettings) -> SplinePath:
+    """``path`` with its end point free when the settings have a goal."""
+    if settings.goal is None or isinstance(path, FreeEndPath):
+        return path
+    return FreeEndPath.release_end(path, settings.boundary)
 
 
 def latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: MinTorqueSettings, tube: float,
@@ -225,6 +262,7 @@ def latent_nlp(gpdm: GPDM, model: SymbolicModel, settings: MinTorqueSettings, tu
         if t_train is None:
             raise ValueError("latent_nlp needs the initial path or the training times t_train to fit it")
         path = SplinePath.fit(settings.spline(), t_train, gpdm.latent_trajectories()[0], settings.boundary)
+    path = _goal_path(path, settings)
     n = path.n_w
     return _build("latent", model, GPLayer(gpdm), settings, path, np.full(n, -np.inf), np.full(n, np.inf),
                   float(tube), extra)
@@ -234,7 +272,7 @@ def joint_range_nlp(model: SymbolicModel, settings: MinTorqueSettings, t_train: 
                     joint_range_deg: float, extra: Samples | None = None) -> MinTorqueNLP:
     """Eq. 4 (= Eq. 22 with q = x) over joint-space control points, each within
     +-``joint_range_deg`` of the training motion's spline fit (Sect. 4.1.1)."""
-    path = SplinePath.fit(settings.spline(), t_train, Q_train, settings.boundary)
+    path = _goal_path(SplinePath.fit(settings.spline(), t_train, Q_train, settings.boundary), settings)
     k = np.radians(float(joint_range_deg))
     return _build("joint-range", model, IdentityLayer(model.nq), settings, path, path.w0 - k, path.w0 + k, None,
                   extra)
@@ -254,15 +292,15 @@ def ipopt_options(nlp: MinTorqueNLP, *, tol: float, max_iter: int, verbose: bool
 
 
 def sampled_motion(layer: GPLayer | IdentityLayer, robot: pin.Model, spline: BSpline, P: np.ndarray,
-                   t: np.ndarray) -> dict[str, np.ndarray]:
+                   t: np.ndarray, objective: Objective = Objective()) -> dict[str, np.ndarray]:
     """q, v, a (Eq. 26-28 through ``layer``) along the path P at times t, tau from Pinocchio's
-    numeric RNEA and L = |tau|^2: arrays len(t) x nv (L: len(t))."""
+    numeric RNEA and the objective's L (default |tau|^2): arrays len(t) x nv (L: len(t))."""
     Z = np.hstack([spline.evaluate(P, t, r) for r in range(3)])
     m = layer.motion(Z)
     data = robot.createData()
     tau = np.array([np.array(pin.rnea(robot, data, q, v, a)) for q, v, a in zip(m.y, m.yd, m.ydd)])
-    return {"q": np.asarray(m.y), "v": np.asarray(m.yd), "a": np.asarray(m.ydd), "tau": tau,
-            "L": np.sum(tau * tau, axis=1)}
+    q, v, a = np.asarray(m.y), np.asarray(m.yd), np.asarray(m.ydd)
+    return {"q": q, "v": v, "a": a, "tau": tau, "L": objective.integrand(tau, v, a)}
 
 
 TUBE_TOL = 1e-6  # sigma^2 on the 1 kHz grid may exceed delta by this fraction of it
@@ -276,11 +314,12 @@ def _worst_times(t: np.ndarray, slack: np.ndarray, tol: float) -> np.ndarray:
     return t[(slack < -tol) & (slack <= left) & (slack <= right)]
 
 
-def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.ndarray | None, t: np.ndarray,
-                   model: SymbolicModel, torque_limits: Sequence[float], joint_limits: bool) -> tuple[Samples, dict]:
+def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.ndarray | None,
+                   t: np.ndarray) -> tuple[Samples, dict]:
     """Where the motion sampled at times t (:func:`sampled_motion`) leaves the tube (by more than
-    TUBE_TOL of delta), the joint limits or the torque limits (by more than LIMIT_TOL): each violated
-    stretch's worst time, to add to the NLP (the exchange), and the largest violations."""
+    TUBE_TOL of delta), the joint, velocity or torque limits of ``nlp.limits`` (by more than
+    LIMIT_TOL): each violated stretch's worst time, to add to the NLP (the exchange), and the
+    largest violations."""
     inside = (t > 0) & (t < t[-1])
     grid_slack = np.full(len(t), np.inf)
     worst = {}
@@ -288,15 +327,14 @@ def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.
         slack = (nlp.tube - sigma2) / nlp.tube
         worst["tube_rel"] = float(max(0.0, -slack.min()))
         grid_slack = np.minimum(grid_slack, slack / TUBE_TOL)
-    if joint_limits:
-        q = motion["q"]
-        slack = np.minimum(q - model.model.lowerPositionLimit, model.model.upperPositionLimit - q).min(axis=1)
-        worst["joint_limits_rad"] = float(max(0.0, -slack.min()))
-        grid_slack = np.minimum(grid_slack, slack / LIMIT_TOL)
+    slacks = nlp.limits.slacks(motion)
+    for key in ("joint_limits_rad", "velocity_limits_rad_s"):  # rows on the constraint grid
+        if key in slacks:
+            worst[key] = float(max(0.0, -slacks[key].min()))
+            grid_slack = np.minimum(grid_slack, slacks[key] / LIMIT_TOL)
     add = Samples(_worst_times(t[inside], grid_slack[inside], 1.0))
-    tmax = torque_limit_vector(torque_limits, model.nv)
-    if tmax is not None:
-        slack = (tmax - np.abs(motion["tau"])).min(axis=1)
+    if "torque_limits_nm" in slacks:
+        slack = slacks["torque_limits_nm"]
         worst["torque_limits_nm"] = float(max(0.0, -slack.min()))
         add.torque = _worst_times(t, slack, LIMIT_TOL)
     known = nlp.extra.merged(Samples(nlp.grid_t, nlp.quad_t))
