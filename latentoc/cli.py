@@ -1,4 +1,4 @@
-"""Command line: ``python -m latentoc {list,show,solve,sweep,start-poses,bench} ...``.
+"""Command line: ``python -m latentoc {list,show,learn,solve,sweep,start-poses,reproduce,bench} ...``.
 
 Input errors (:class:`latentoc.LatentocError`: bad problem, infeasible tube, ...) print
 ``latentoc: error: <message>`` and exit with code 2 without writing anything; any other
@@ -44,6 +44,22 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--verbose", action="store_true", help="Ipopt's own iteration log")
     s.add_argument("--keep-failed", action="store_true", help="write files even if Ipopt did not succeed")
     s.add_argument("--plots", action="store_true", help="also write PNG figures (and motion.gif) to OUT/plots")
+    s.add_argument("--gpdm", type=Path, default=None,
+                   help="a GPDM written by `learn` (its gpdm.npz) instead of learning the problem's")
+
+    ln = sub.add_parser("learn", help="learn a GPDM from a motion file: gpdm.npz, learn.json (and figures)")
+    ln.add_argument("file", type=Path, help="the motion: .csv (t and joint columns), .npz (t, q, joint_names) or .amc")
+    ln.add_argument("--robot", required=True, help="a robot name (latentoc.robots) or the path of a URDF file")
+    ln.add_argument("--latent-dim", type=int, default=3, help="latent dimension d (default 3)")
+    ln.add_argument("--out", type=Path, required=True, help="output folder")
+    ln.add_argument("--plots", action="store_true", help="also write latent_tube.png, reconstruction.png, variance.png")
+    ln.add_argument("--stride", type=int, default=1, help="learn on every k-th frame (the last one always kept)")
+    ln.add_argument("--clip", action="store_true", help="clip a motion that leaves the joint limits to them")
+    ln.add_argument("--rate", type=float, default=None, help="resample to this rate, Hz (default: the file's median)")
+    ln.add_argument("--asf", type=Path, default=None, help="the ASF skeleton of an .amc motion")
+    ln.add_argument("--start", type=int, default=None, help="first frame (0-based)")
+    ln.add_argument("--stop", type=int, default=None, help="one past the last frame")
+    ln.add_argument("--fps", type=float, default=120.0, help="frame rate of an .amc motion (default 120)")
 
     ls = sub.add_parser("list", help="list the packaged problems")
     ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
@@ -92,6 +108,28 @@ def _overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
     return {k: values[k] for k in names if values[k] is not None}
 
 
+def _cmd_learn(args: argparse.Namespace) -> int:
+    from .learn import learn_file
+
+    if args.stride < 1 or args.latent_dim < 1:
+        raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
+    learned, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
+                                plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
+                                start=args.start, stop=args.stop, fps=args.fps)
+    s = learned.summary()
+    demo = s["demonstration"]
+    print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
+          f"{len(demo['joints'])} joints" + (f", {len(demo['locked_joints'])} locked" if demo["locked_joints"] else "")
+          + (", resampled" if demo["resampled"] else "") + (f", clipped {demo['clipped']}" if demo["clipped"] else ""))
+    report = s["learning"]
+    ended = "" if report is None else " (converged)" if report["converged"] else f" (not converged: {report['message']})"
+    print(f"  GPDM d = {s['latent_dim']} on {s['learned_frames']} frames in {s['learning_time_s']:.2f} s{ended}")
+    print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
+          f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
+    print("  wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
 def _cmd_list(args: argparse.Namespace) -> int:
     from .problem import describe_problem, load_problem, problem_names
     for name in problem_names():
@@ -137,7 +175,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from .problem import load_problem
 
     problem = load_problem(args.problem, **_overrides(args, "tube", "latent_dim", "control_points", "hessian"))
-    r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose)
+    gpdm = None
+    if args.gpdm is not None:
+        from .learn import load_learned_gpdm
+        gpdm = load_learned_gpdm(args.gpdm)
+    r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose, gpdm=gpdm)
     print(summary(r))
     if not r.success and not args.keep_failed:
         print("latentoc: solve did not succeed; nothing written (use --keep-failed to write anyway)", file=sys.stderr)
@@ -272,7 +314,7 @@ def main(argv: list[str] | None = None) -> int:
 
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
-    commands = {"list": _cmd_list, "show": _cmd_show, "solve": _cmd_solve, "sweep": _cmd_sweep,
+    commands = {"list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
                 "reproduce": _cmd_reproduce,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:

@@ -221,6 +221,9 @@ def _reduced(model: pin.Model, names: list[str], fixed_pose: dict[str, float], p
         if name in names:
             continue
         jm = model.joints[j]
+        if jm.shortname() == "JointModelFreeFlyer":  # locking it would fix a floating base in the world
+            raise MotionFileError(f"{path}: the robot's free-flyer root {name!r} cannot be locked at a pose; use a "
+                                  "fixed-base robot (free_flyer = false)")
         if name in fixed_pose:
             if jm.nq != 1:
                 raise MotionFileError(f"{path}: fixed_pose: joint {name!r} has {jm.nq} coordinates, one value given")

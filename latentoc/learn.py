@@ -1,0 +1,159 @@
+"""Learn a GPDM from the user's motion file (``python -m latentoc learn FILE --robot NAME_OR_URDF``).
+
+Reads the motion on the robot (:mod:`latentoc.motions`), learns a GPDM (Eq. 16) from its frames,
+and writes into one folder, only after everything has been computed (a bad input writes nothing):
+
+* ``gpdm.npz``: the model (:meth:`latentoc.gpdm.GPDM.save`), the input of a problem's solve;
+* ``learn.json``: the demonstration (source, frames, rate, joints, locked joints, resampling,
+  clipping), the GPDM's settings and learning report, its reconstruction error (RMS of the GP
+  mean at the training latent points minus the motion, Eq. 18; overall and per joint) and the
+  training tube tube_training (Eq. 30), the largest sigma^2 (Eq. 19) along the training path;
+* with ``plots``: ``latent_tube.png`` (the training path in the tube at tube_training),
+  ``reconstruction.png`` (the motion and the GP mean) and ``variance.png`` (sigma^2 along the
+  training path against time, with tube_training).
+"""
+from __future__ import annotations
+
+import io
+import json
+import tempfile
+import time
+from dataclasses import asdict, dataclass, is_dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from matplotlib.figure import Figure
+
+from .gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
+from .motions import Demonstration, check_frames, demonstration_from_file
+from .results import GPDM_NAME, write_files
+from .robots import load_robot, load_urdf
+
+__all__ = ["LearnedMotion", "learn_motion", "learn_file", "figures", "robot_from_argument", "load_learned_gpdm",
+           "LEARN_NAME"]
+
+LEARN_NAME = "learn.json"
+
+
+def robot_from_argument(text: str) -> pin.Model:
+    """The robot of ``--robot``: a registered name, or the path of a URDF file (fixed base)."""
+    if text.lower().endswith(".urdf") or "/" in text or Path(text).is_file():
+        return load_urdf(Path(text))
+    return load_robot(text)
+
+
+@dataclass
+class LearnedMotion:
+    """A GPDM learned from a demonstration, with its reconstruction error and training tube."""
+
+    demonstration: Demonstration
+    gpdm: GPDM
+    frames: np.ndarray  # the indices of the demonstration's frames it learned from
+    time_s: float
+
+    @property
+    def reconstruction_rmse(self) -> np.ndarray:
+        """Per joint: RMS of mean(X) - Y over the training frames (rad or m), Eq. 18."""
+        return np.sqrt(np.mean((self.gpdm.mean(self.gpdm.X) - self.gpdm.Y) ** 2, axis=0))
+
+    def summary(self) -> dict[str, Any]:
+        """``learn.json``'s content (module doc)."""
+        g = self.gpdm
+        per_joint = self.reconstruction_rmse
+        report = getattr(g, "learning", None)  # how learning ended, where the GPDM records it
+        return {"demonstration": self.demonstration.info(), "learned_frames": int(len(self.frames)),
+                "latent_dim": g.latent_dim, "settings": json.loads(g.settings.to_json()),
+                "learning": asdict(report) if is_dataclass(report) and not isinstance(report, type) else None,
+                "learning_time_s": self.time_s, "objective_value": float(g.objective_value),
+                "reconstruction_rmse": float(np.sqrt(np.mean(per_joint ** 2))),
+                "reconstruction_rmse_per_joint": dict(zip(self.demonstration.joint_names, map(float, per_joint))),
+                "tube_training": g.tube_size(), "noise_variance": g.noise_variance,
+                "alpha": g.alpha.tolist(), "beta": g.beta.tolist()}
+
+
+def learn_motion(demo: Demonstration, latent_dim: int = 3, stride: int = 1,
+                 settings: GPDMSettings | None = None) -> LearnedMotion:
+    """A GPDM of every ``stride``-th frame of ``demo`` (the last frame always kept)."""
+    check_frames(demo, latent_dim, stride)
+    frames = np.arange(0, len(demo.t), stride)
+    if frames[-1] != len(demo.t) - 1:
+        frames = np.append(frames, len(demo.t) - 1)
+    settings = GPDMSettings(latent_dim=latent_dim) if settings is None else settings
+    t0 = time.perf_counter()
+    gp = learn_gpdm(demo.Q[frames], settings)
+    return LearnedMotion(demo, gp, frames, time.perf_counter() - t0)
+
+
+def _png(fig: Figure) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100)
+    return buffer.getvalue()
+
+
+def _variance_png(learned: LearnedMotion) -> bytes:
+    """sigma^2 along the training latent path (linear between its points) against time."""
+    g, t = learned.gpdm, learned.demonstration.t[learned.frames]
+    X = g.latent_trajectories()[0]
+    s = np.linspace(0.0, 1.0, 11)[:-1]
+    pts = np.vstack([(X[:-1, None, :] * (1 - s)[None, :, None] + X[1:, None, :] * s[None, :, None]).reshape(-1, X.shape[1]),
+                     X[-1:]])
+    tt = np.append((t[:-1, None] * (1 - s) + t[1:, None] * s).ravel(), t[-1])
+    fig = Figure(figsize=(8.0, 3.5), dpi=100)
+    ax = fig.add_subplot()
+    ax.plot(tt, g.variance(pts), lw=1.5, label="$\\sigma^2$ along the training path (Eq. 19)")
+    ax.axhline(g.tube_size(), color="goldenrod", ls="--", label="tube_training (Eq. 30)")
+    ax.axhline(g.noise_variance, color="grey", ls=":", label="noise variance $1/\\beta_3$")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("$\\sigma^2$")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def figures(learned: LearnedMotion, title: str) -> dict[str, bytes]:
+    """The PNG figures by file name (module doc)."""
+    from .plots import plot_joint_curves, plot_latent_tube
+
+    g, demo = learned.gpdm, learned.demonstration
+    out = {"variance.png": _variance_png(learned)}
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = [plot_joint_curves(demo.t[learned.frames], {"demonstration": g.Y, "GPDM mean (Eq. 18)": g.mean(g.X)},
+                                   demo.joint_names, Path(tmp) / "reconstruction.png")]
+        if g.latent_dim in (2, 3):
+            paths.append(plot_latent_tube(g, g.tube_size(), Path(tmp) / "latent_tube.png",
+                                          paths={"training path": g.latent_trajectories()[0]},
+                                          title=f"{title}: tube at tube_training = {g.tube_size():.3g}"))
+        out.update({p.name: p.read_bytes() for p in paths})
+    return out
+
+
+def learn_file(path: str | Path, robot: str, out: str | Path, *, latent_dim: int = 3, stride: int = 1,
+               plots: bool = False, clip_to_limits: bool = False, rate: float | None = None,
+               asf: str | Path | None = None, start: int | None = None, stop: int | None = None,
+               fps: float = 120.0) -> tuple[LearnedMotion, list[Path]]:
+    """The ``learn`` command: read, learn, then write the folder ``out`` (module doc)."""
+    demo = demonstration_from_file(path, robot_from_argument(robot), asf=asf, fps=fps, start=start, stop=stop,
+                                   rate=rate, clip_to_limits=clip_to_limits)
+    learned = learn_motion(demo, latent_dim, stride)
+    with tempfile.TemporaryDirectory() as tmp:  # GPDM.save writes to a path
+        learned.gpdm.save(Path(tmp) / GPDM_NAME)
+        files = {GPDM_NAME: (Path(tmp) / GPDM_NAME).read_bytes()}
+    if plots:
+        files.update(figures(learned, Path(path).stem))
+    summary = {"robot": robot, **learned.summary()}
+    files[LEARN_NAME] = (json.dumps(summary, indent=2) + "\n").encode()
+    return learned, write_files(files, out)
+
+
+def load_learned_gpdm(path: str | Path) -> GPDM:
+    """The GPDM in ``path`` (a ``gpdm.npz`` of ``learn`` or of a result folder); a GPDMInputError
+    naming the file if it is missing or not one."""
+    path = Path(path)
+    if not path.is_file():
+        raise GPDMInputError(f"GPDM file {path} does not exist")
+    try:
+        return GPDM.load(path)
+    except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
+        raise GPDMInputError(f"{path} is not a GPDM written by latentoc ({exc})") from None
