@@ -46,7 +46,7 @@ def joint_kinematics(n: int) -> ca.Function:
 
 
 def composed(path: SplinePath, sym: SymbolicModel, kin: ca.Function, variance: ca.Function | None,
-             tmax: np.ndarray | None) -> ca.Function:
+             tmax: np.ndarray | None, tube: float = 1.0) -> ca.Function:
     """(w, sigma, lam) -> (f, grad f, g, dg/dw, triu d2(sigma f + lam . g)/dw2), all by CasADi."""
     spline, m = path.spline, path.spline.n_control
     w = ca.SX.sym("w", path.n_w)
@@ -65,7 +65,7 @@ def composed(path: SplinePath, sym: SymbolicModel, kin: ca.Function, variance: c
         taus.append(tau)
     g = []
     if variance is not None:
-        g += [variance(Xg[0][j, :].T) for j in range(len(tg))]
+        g += [variance(Xg[0][j, :].T) / tube for j in range(len(tg))]
     g += [kin(*(X[j, :].T for X in Xg))[0] for j in range(len(tg))]
     if tmax is not None:
         g += taus
@@ -107,11 +107,11 @@ def test_latent_nlp_equals_composed_casadi(arm, torque_limits):
     Kq, Kg = len(nlp.quad_t), len(nlp.grid_t)
     expected = {"tube": Kg, "joint_limits": 7 * Kg} | ({"torque": 7 * Kq} if torque_limits else {})
     assert {k: s.stop - s.start for k, s in nlp.rows.items()} == expected
-    assert np.all(nlp.ubg[nlp.rows["tube"]] == 0.05) and np.all(np.isinf(nlp.lbx))
+    assert np.all(nlp.ubg[nlp.rows["tube"]] == 1.0) and np.all(np.isinf(nlp.lbx))  # sigma^2 / delta <= 1
     if torque_limits:
         assert np.all(nlp.ubg[nlp.rows["torque"]] == 50.0) and np.all(nlp.lbg[nlp.rows["torque"]] == -50.0)
     tmax = np.full(7, 50.0) if torque_limits else None
-    ref = composed(nlp.path, sym, latent_kinematics(gp), gp.variance_function(), tmax)
+    ref = composed(nlp.path, sym, latent_kinematics(gp), gp.variance_function(), tmax, tube=0.05)
     check_against_composed(nlp, ref, seed=1)
 
 
