@@ -33,7 +33,7 @@ import pinocchio as pin
 
 from .dynamics import SymbolicModel
 from .errors import ProblemError, SolveError
-from .gpdm import GPDM, GPDMSettings, learn_gpdm
+from .gpdm import GPDM, GPDMSettings, learned_gpdm
 from .kinds.goal import goal_error
 from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp,
                                latent_nlp, sampled_motion, violated_times)
@@ -68,11 +68,11 @@ def _position(v: object) -> list[float]:
 
 
 _GPDM_DEFAULTS = GPDMSettings()
-_GPDM_CHECKS = {"balanced": boolean(), "outer_iterations": integer(1), "max_iterations": integer(1),
+_GPDM_CHECKS = {"balanced": boolean(), "ftol": number(0, lo_open=True), "max_iterations": integer(1),
                 "seed": integer(), "init": choice("pca", "random"), "kappa_sq": number(0, lo_open=True),
-                "log_hyper_bound": number(0, lo_open=True), "beta3_max": optional(number(0, lo_open=True)),
-                "gtol": number(0, lo_open=True)}
-_GPDM_DOCS = {"beta3_max": "upper bound on beta_3 (a noise floor 1/beta3_max); none: unbounded",
+                "log_hyper_bound": number(0, lo_open=True)}
+_GPDM_DOCS = {"ftol": "convergence: the Newton decrement of Eq. 16 <= ftol |Eq. 16|",
+              "max_iterations": "Newton iterations at most (a safety cap: then reported not converged)",
               "training_stride": "learn on every k-th training frame (the last one always kept)"}
 _SPLINE = MinTorqueSettings(duration=1.0)  # the transcription's defaults
 
@@ -168,7 +168,7 @@ def problem_gpdm(problem: Problem) -> tuple[GPDM, float]:
     key = json.dumps([digest, Q.shape, settings.to_json()])
     if key not in _GPDM_CACHE:
         t0 = time.perf_counter()
-        model = learn_gpdm(Q, settings)
+        model = learned_gpdm(Q, settings)
         _GPDM_CACHE[key] = (model, time.perf_counter() - t0)
     return _GPDM_CACHE[key]
 
@@ -343,6 +343,7 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
                    "violations": {"tube": max(0.0, float(np.max(sigma2)) - delta),
                                   **_limit_violations(settings, robot, motion)},
                    "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None,
+                   **gp.learning_summary(),
                    "exchange_rounds": rounds, **_own_motion(problem, demo, settings, motion["q"])})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     result["iterations"] = sum(r["iterations"] for r in rounds)

@@ -109,18 +109,20 @@ class Environment:
     cpu: str
     cpu_count: int
     threads: int
+    scipy: str = "?"  # results saved before it was recorded load without it
 
     @classmethod
     def current(cls) -> Environment:
         import casadi
         import pinocchio
+        import scipy
 
         from .version import __version__
         from .nlp.jit import threads
 
         return cls(latentoc=__version__, casadi=casadi.CasadiMeta.version(), pinocchio=getattr(pinocchio, "__version__", "?"),
                    numpy=np.__version__, python=platform.python_version(), cpu=_cpu_name(),
-                   cpu_count=os.cpu_count() or 1, threads=threads())
+                   cpu_count=os.cpu_count() or 1, threads=threads(), scipy=scipy.__version__)
 
 
 def _cpu_name() -> str:

@@ -16,7 +16,7 @@ RTOL = 1e-10  # of the largest reference entry, per array
 
 
 def _learn(Y, d: int):
-    return learn_gpdm(Y, GPDMSettings(latent_dim=d, outer_iterations=2, max_iterations=40))
+    return learn_gpdm(Y, GPDMSettings(latent_dim=d, max_iterations=40))
 
 
 @pytest.fixture(scope="module", params=["d2", "d3", "two_sequences"])

@@ -1,13 +1,14 @@
-"""GPDM learning (Eq. 16): objective decrease, smooth latent trajectories,
-a known latent circle, several sequences, input validation."""
+"""GPDM learning (Eq. 16 with the model's priors): convergence and its report, the stationarity
+the priors imply along the latent rescaling (known analytically), smooth latent trajectories, a
+known latent circle, several sequences, input validation."""
 
 import numpy as np
 import pytest
 
 from latentoc.benchmarks.gpdm_bench import synthetic_motion
 from latentoc.gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
-from latentoc.gpdm.learning import pca_initialization, roughness
-from latentoc.gpdm.objective import GPDMProblem, neg_log_posterior, optimal_w, pack
+from latentoc.gpdm.learning import learning_problem, pca_initialization, roughness
+from latentoc.gpdm.objective import HYPER_NAMES, neg_log_posterior, pack
 
 
 def circle_data(N=80, turns=2.0, D=20, seed=1, noise=0.01):
@@ -28,25 +29,94 @@ def motion():
     return Y, settings, learn_gpdm(Y, settings)
 
 
-def _objective_at_pca_start(Y, settings):
-    Yc = Y - Y.mean(axis=0)
-    X0 = pca_initialization(Yc, settings.latent_dim)
-    lam = Y.shape[1] / settings.latent_dim if settings.balanced else 1.0
-    p = GPDMProblem(Yc, [len(Y)], settings.latent_dim, dynamics_weight=lam)
-    b0 = np.array(settings.beta0)
-    w0 = optimal_w(Yc, X0, b0, settings.kappa_sq)
-    return neg_log_posterior(pack(X0, np.array(settings.alpha0), b0), p, w0, with_grad=False)
+def _objective(model, X=None):
+    """The objective learning minimised, recomputed from the model (W profiled)."""
+    p = learning_problem(model.Y - model.Y_mean, model.sequence_lengths, model.settings)
+    v = pack(model.X if X is None else X, model.alpha, model.beta)
+    return neg_log_posterior(v, p, with_grad=False), p, v
 
 
 def test_objective_decreases_from_pca_start(motion):
     Y, settings, model = motion
-    f0 = _objective_at_pca_start(Y, settings)
+    X0 = pca_initialization(Y - Y.mean(axis=0), settings.latent_dim)
+    p = learning_problem(Y - Y.mean(axis=0), [len(Y)], settings)
+    theta0 = np.array(settings.alpha0 + settings.beta0)
+    theta0[HYPER_NAMES.index("beta1")] = settings.fixed["beta1"]
+    f0 = neg_log_posterior(pack(X0, theta0[:4], theta0[4:]), p, with_grad=False)
     assert model.objective_value < f0 - 0.1 * abs(f0)
     # the recorded value is the objective of the returned variables
-    lam = Y.shape[1] / 3 if settings.balanced else 1.0
-    p = GPDMProblem(Y - model.Y_mean, model.sequence_lengths, 3, dynamics_weight=lam)
-    f = neg_log_posterior(pack(model.X, model.alpha, model.beta), p, model.W, with_grad=False)
-    assert f == pytest.approx(model.objective_value, rel=1e-12)
+    assert _objective(model)[0] == pytest.approx(model.objective_value, rel=1e-12)
+
+
+def test_converges_and_reports_it():
+    """The convergence test held: the Newton decrement (recomputed here from a central-difference
+    Hessian) is below ftol |L|, so no Newton step can lower L by more than that."""
+    settings = GPDMSettings(latent_dim=3)
+    model = learn_gpdm(synthetic_motion(50, 8, seed=2, noise=0.05), settings)
+    r = model.learning
+    assert r.converged and r.iterations > 0 and r.evaluations > r.iterations and "Newton decrement" in r.message
+    f, p, v = _objective(model)
+    free = np.ones(v.size, dtype=bool)
+    free[v.size - 7 + HYPER_NAMES.index("beta1")] = False
+    g = neg_log_posterior(v, p)[1][free]
+    assert np.max(np.abs(g)) == pytest.approx(r.gradient_norm, rel=1e-6)
+    n, h = int(free.sum()), 1e-5
+    H = np.empty((n, n))
+    idx = np.flatnonzero(free)
+    for j, k in enumerate(idx):
+        e = np.zeros(v.size)
+        e[k] = h
+        H[:, j] = (neg_log_posterior(v + e, p)[1][free] - neg_log_posterior(v - e, p)[1][free]) / (2 * h)
+    lam, V = np.linalg.eigh(0.5 * (H + H.T))
+    a = np.maximum(np.abs(lam), 1e-12 * np.abs(lam).max())
+    decrement = 0.5 * np.sum((V.T @ g) ** 2 / a)
+    assert decrement <= 10 * settings.ftol * abs(f)
+    assert model.learning_summary() == {
+        "gpdm_objective": model.objective_value, "gpdm_iterations": r.iterations, "gpdm_evaluations": r.evaluations,
+        "gpdm_gradient_norm": r.gradient_norm, "gpdm_newton_decrement": r.newton_decrement, "gpdm_converged": True}
+
+
+def test_prior_fixes_the_latent_scale_as_predicted(motion):
+    """X -> sX with alpha_1 -> s^2 alpha_1, alpha_2, alpha_4, beta_2 -> theta / s^2 changes Eq. 16
+    only by lambda d n ln s (ln|K_X|), the first point's prior and the hyperparameter priors
+    (test_gpdm_objective). At a minimum the derivative in ln s vanishes, which with Gamma(a, b)
+    priors P = -(a - 1) ln theta + b theta reads
+    lambda d n + |x_1|^2 + 2 P'(alpha_1) - 2 P'(alpha_2) - 2 P'(alpha_4) - 2 P'(beta_2) = 0,
+    P'(theta) = -(a - 1) + b theta: the priors set alpha_4."""
+    Y, settings, model = motion
+    lam = Y.shape[1] / settings.latent_dim if settings.balanced else 1.0
+    n = len(Y) - 1
+    theta = dict(zip(HYPER_NAMES, np.concatenate([model.alpha, model.beta])))
+
+    def dP(name):
+        a, b = settings.gamma[name]
+        return -(a - 1.0) + b * theta[name]
+
+    terms = [lam * settings.latent_dim * n, float(np.sum(model.X[0] ** 2)), 2 * dP("alpha1"), -2 * dP("alpha2"),
+             -2 * dP("alpha4"), -2 * dP("beta2")]
+    assert abs(sum(terms)) < 1e-5 * max(abs(t) for t in terms)
+
+
+def test_fixed_hyperparameters_and_priors_are_the_models(motion):
+    Y, settings, model = motion
+    assert model.beta[0] == settings.fixed["beta1"] == 1.0
+    assert set(settings.gamma) == set(HYPER_NAMES) - {"beta1"}
+    assert settings.balanced
+
+
+def test_safety_cap_is_reported_as_not_converged():
+    Y = synthetic_motion(40, 6, seed=3, noise=0.02)
+    model = learn_gpdm(Y, GPDMSettings(latent_dim=2, max_iterations=5))
+    assert not model.learning.converged and model.learning.iterations <= 5
+    assert model.learning_summary()["gpdm_converged"] is False
+
+
+def test_plain_eq16_has_no_minimum_and_is_not_reported_converged():
+    """Eq. 16 with its 1/theta priors: the hyperparameters run away until the cap."""
+    Y = synthetic_motion(40, 6, seed=3, noise=0.0)
+    model = learn_gpdm(Y, GPDMSettings(latent_dim=2, fixed={}, gamma={}, balanced=False, max_iterations=60))
+    assert not model.learning.converged
+    assert max(np.abs(np.log(np.concatenate([model.alpha, model.beta])))) > 8
 
 
 def test_latent_trajectory_is_smooth(motion):
@@ -103,16 +173,14 @@ def test_latent_circle_closes_into_loop():
 def test_two_sequences():
     Y = circle_data(N=100, turns=2.5, seed=2)
     seqs = [Y[:55], Y[55:]]
-    model = learn_gpdm(seqs, GPDMSettings(latent_dim=2, outer_iterations=3))
+    model = learn_gpdm(seqs, GPDMSettings(latent_dim=2))
+    assert model.learning.converged
     assert model.sequence_lengths == [55, 45]
     trajs = model.latent_trajectories()
     assert [t.shape for t in trajs] == [(55, 2), (45, 2)]
     np.testing.assert_array_equal(np.vstack(trajs), model.X)
     # objective uses per-sequence X_in/X_out: compare against the problem built from lengths
-    p = GPDMProblem(np.vstack(seqs) - model.Y_mean, [55, 45], 2,
-                    dynamics_weight=20 / 2 if model.settings.balanced else 1.0)
-    f = neg_log_posterior(pack(model.X, model.alpha, model.beta), p, model.W, with_grad=False)
-    assert f == pytest.approx(model.objective_value, rel=1e-12)
+    assert _objective(model)[0] == pytest.approx(model.objective_value, rel=1e-12)
     # both sequences trace the same circle: the second sequence's start lies
     # near the first sequence's latent points of the same phase (frame 55 - 40 = 15)
     diam = np.max(np.linalg.norm(model.X[:, None] - model.X[None], axis=-1))
@@ -123,7 +191,7 @@ def test_two_sequences():
 def test_constant_column_does_not_break_learning():
     Y = synthetic_motion(60, 8, seed=4, noise=0.02)
     Y[:, 3] = 1.25
-    model = learn_gpdm(Y, GPDMSettings(latent_dim=2, outer_iterations=2, max_iterations=30))
+    model = learn_gpdm(Y, GPDMSettings(latent_dim=2, max_iterations=30))
     assert np.all(np.isfinite(model.X)) and np.isfinite(model.objective_value)
     assert model.W[3] > 100 * np.max(np.delete(model.W, 3))
     np.testing.assert_allclose(model.mean(model.X)[:, 3], 1.25, atol=1e-9)
@@ -159,11 +227,10 @@ def test_too_few_frames_for_latent_dim_raises():
 
 def test_random_init_uses_seed_and_learns():
     Y = synthetic_motion(40, 6, seed=6, noise=0.02)
-    s1 = GPDMSettings(latent_dim=2, init="random", seed=1, outer_iterations=2, max_iterations=40)
+    s1 = GPDMSettings(latent_dim=2, init="random", seed=1)
     m1 = learn_gpdm(Y, s1)
     m1b = learn_gpdm(Y, s1)
-    m2 = learn_gpdm(Y, GPDMSettings(latent_dim=2, init="random", seed=2, outer_iterations=1,
-                                    max_iterations=1))
+    m2 = learn_gpdm(Y, GPDMSettings(latent_dim=2, init="random", seed=2, max_iterations=1))
     np.testing.assert_array_equal(m1.X, m1b.X)  # deterministic for a fixed seed
     assert not np.allclose(m1.X, m2.X)
     assert m1.reconstruction_rmse() < 0.2 * Y.std()
@@ -177,14 +244,48 @@ def test_roughness_reference_values():
     assert 1.5 < roughness(noise) < 1.9
 
 
-def test_beta3_max_bounds_the_noise_and_defaults_off(motion):
-    """beta3_max (default None) caps beta_3, i.e. floors the noise variance at 1/beta3_max."""
-    Y, settings, model = motion
-    assert GPDMSettings().beta3_max is None
-    assert model.beta[2] > 20.0  # unbounded: beta_3 ~ 41 on this motion
-    bounded = learn_gpdm(Y, GPDMSettings(latent_dim=3, beta3_max=10.0))
-    assert bounded.beta[2] <= 10.0 * (1 + 1e-9)
-    assert bounded.noise_variance >= 0.1 * (1 - 1e-9)
-    assert GPDMSettings.from_json(bounded.settings.to_json()) == bounded.settings
-    with pytest.raises(GPDMInputError, match="beta3_max"):
-        learn_gpdm(Y, GPDMSettings(latent_dim=3, beta3_max=-1.0))
+@pytest.mark.parametrize("kw,words", [
+    (dict(fixed={"beta4": 1.0}), ["settings.fixed", "beta4"]),
+    (dict(fixed={"beta1": 0.0}), ["settings.fixed", "beta1"]),
+    (dict(gamma={"alpha2": (2.0, -1.0)}), ["settings.gamma", "alpha2"]),
+    (dict(ftol=0.0), ["ftol"]),
+])
+def test_bad_settings_raise(kw, words):
+    Y = synthetic_motion(20, 6, seed=5)
+    with pytest.raises(GPDMInputError) as exc:
+        learn_gpdm(Y, GPDMSettings(latent_dim=2, **kw))
+    for w in words:
+        assert w in str(exc.value)
+
+
+def test_settings_json_round_trip():
+    s = GPDMSettings(latent_dim=2, fixed={"beta1": 1.0, "alpha3": 0.5}, gamma={"beta3": (3.0, 0.5)})
+    assert GPDMSettings.from_json(s.to_json()) == s
+    old = s.to_json().replace('"ftol"', '"beta3_max": 3000.0, "ftol"')  # a model saved before: key dropped
+    assert GPDMSettings.from_json(old) == s
+
+
+def test_same_model_with_one_or_two_blas_threads_and_permuted_joints():
+    """Converged, the model does not depend on the BLAS's thread count or on the order of the
+    joint columns (Eq. 16 is invariant under permuting them): the same objective to 1e-6."""
+    Y = synthetic_motion(60, 10, seed=4, noise=0.05)
+    one = learn_gpdm(Y, GPDMSettings(latent_dim=3, blas_threads=1))
+    two = learn_gpdm(Y, GPDMSettings(latent_dim=3, blas_threads=2))
+    perm = np.random.default_rng(0).permutation(Y.shape[1])
+    swapped = learn_gpdm(Y[:, perm], GPDMSettings(latent_dim=3))
+    assert one.learning.converged and two.learning.converged and swapped.learning.converged
+    assert two.objective_value == pytest.approx(one.objective_value, rel=1e-6)
+    assert swapped.objective_value == pytest.approx(one.objective_value, rel=1e-6)
+    # the same mean and variance at the training points, in the permuted joints' order
+    mu = np.array([one.mean(x) for x in one.X])
+    np.testing.assert_allclose(np.array([swapped.mean(x) for x in swapped.X]), mu[:, perm], atol=1e-4)
+
+
+def test_same_model_with_the_sequences_in_either_order():
+    """Two sequences given in the other order are the same data: the same objective to 1e-6."""
+    Y = synthetic_motion(80, 8, seed=6, noise=0.05)
+    a, b = Y[:45], Y[45:]
+    ab = learn_gpdm([a, b], GPDMSettings(latent_dim=2))
+    ba = learn_gpdm([b, a], GPDMSettings(latent_dim=2))
+    assert ab.learning.converged and ba.learning.converged
+    assert ba.objective_value == pytest.approx(ab.objective_value, rel=1e-6)

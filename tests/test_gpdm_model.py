@@ -12,7 +12,7 @@ from latentoc.gpdm import GPDM, GPDMSettings, learn_gpdm
 @pytest.fixture(scope="module")
 def model():
     Y = synthetic_motion(90, 12, seed=7, noise=0.03)
-    return learn_gpdm(Y, GPDMSettings(latent_dim=3, outer_iterations=4, max_iterations=50))
+    return learn_gpdm(Y, GPDMSettings(latent_dim=3, max_iterations=50))
 
 
 def _rand_points(model, n, seed=0, spread=1.5):
@@ -161,6 +161,7 @@ def test_save_load_round_trip(model, tmp_path):
     assert m2.sequence_lengths == model.sequence_lengths
     assert m2.settings == model.settings
     assert m2.objective_value == model.objective_value
+    assert m2.learning == model.learning and m2.learning_summary() == model.learning_summary()
     x = _rand_points(model, 6, seed=5)
     assert model.mean(x).tobytes() == m2.mean(x).tobytes()
     assert model.variance(x).tobytes() == m2.variance(x).tobytes()

@@ -112,3 +112,90 @@ def test_safe_cholesky_jitter_fallback():
     np.testing.assert_allclose(L @ L.T, K + jitter * np.eye(6), atol=1e-10)
     L2, j2 = safe_cholesky(K + np.eye(6))
     assert j2 == 0.0
+
+
+def _prior_problem(lengths=(7, 6), lam=2.5, seed=5):
+    """A problem with random Gamma(a, b) priors on all seven hyperparameters."""
+    p, v, w = _problem(lengths=lengths, lam=lam, seed=seed)
+    rng = np.random.default_rng(seed + 100)
+    q = GPDMProblem(p.Y, list(lengths), p.latent_dim, dynamics_weight=lam,
+                    prior_shape=rng.uniform(0.5, 3.0, 7), prior_rate=rng.uniform(0.1, 2.0, 7))
+    return q, v, w
+
+
+def test_profiled_gradient_with_priors_matches_central_differences():
+    """W profiled out (w=None) and Gamma priors: the gradient against central differences."""
+    p, v, _ = _prior_problem()
+    _, g = neg_log_posterior(v, p)
+    h = 1e-6
+    fd = np.array([(neg_log_posterior(v + h * e, p, with_grad=False) - neg_log_posterior(v - h * e, p, with_grad=False))
+                   / (2 * h) for e in np.eye(v.size)])
+    assert np.max(np.abs(fd - g)) / np.max(np.abs(fd)) < 1e-6
+
+
+def test_profiled_value_is_the_minimum_over_w():
+    """L(w=None) = min_w [L(w) + sum w^2 / (2 kappa^2)], attained at optimal_w."""
+    p, v, _ = _prior_problem(seed=6)
+    X, _, b = unpack(v, p.N, p.latent_dim)
+    w = optimal_w(p.Y, X, b, p.kappa_sq)
+
+    def fw(w):
+        return neg_log_posterior(v, p, w, with_grad=False) + np.sum(w ** 2) / (2 * p.kappa_sq)
+
+    f = neg_log_posterior(v, p, with_grad=False)
+    assert f == pytest.approx(fw(w), rel=1e-12)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        assert fw(w * np.exp(0.05 * rng.standard_normal(p.D))) > f
+
+
+def test_gamma_priors_are_minus_log_gamma_densities():
+    """Against scipy.stats.gamma: L(priors a, b) - L(Eq. 16's 1/theta priors) =
+    sum_i [-log Gamma(theta_i; a_i, b_i) - ln theta_i] + the densities' constants."""
+    from scipy.special import gammaln
+    from scipy.stats import gamma
+
+    p, v, w = _prior_problem(seed=7)
+    plain = GPDMProblem(p.Y, p.sequence_lengths, p.latent_dim, dynamics_weight=p.dynamics_weight)
+    _, alpha, beta = unpack(v, p.N, p.latent_dim)
+    theta = np.concatenate([alpha, beta])
+    a, b = p.prior_shape, p.prior_rate
+    expected = np.sum(-gamma.logpdf(theta, a, scale=1 / b) - np.log(theta)
+                      + a * np.log(b) - gammaln(a))
+    diff = neg_log_posterior(v, p, w, with_grad=False) - neg_log_posterior(v, plain, w, with_grad=False)
+    assert diff == pytest.approx(expected, rel=1e-10, abs=1e-10)
+
+
+def test_eq16_is_invariant_under_the_scale_of_w():
+    """(beta1, beta3, W) -> (c beta1, beta3 / c, W sqrt c) leaves Eq. 16 unchanged: the reason
+    learning holds beta1 = 1."""
+    p, v, w = _problem(seed=8)
+    X, alpha, beta = unpack(v, p.N, p.latent_dim)
+    f = neg_log_posterior(v, p, w, with_grad=False)
+    for c in (0.1, 3.0, 1e3):
+        vc = pack(X, alpha, beta * np.array([c, 1.0, 1.0 / c]))
+        assert neg_log_posterior(vc, p, w * np.sqrt(c), with_grad=False) == pytest.approx(f, rel=1e-11, abs=1e-9)
+
+
+@pytest.mark.parametrize("lengths", [(13,), (7, 6)])
+def test_latent_rescaling_lowers_eq16_without_bound(lengths):
+    """X -> sX, alpha -> (s^2 a1, a2 / s^2, a3, a4 / s^2), beta_2 -> beta_2 / s^2 leave K_Y and
+    K_X / s^2 unchanged, so Eq. 16 changes by exactly (d n - 4) ln s + (s^2 - 1) |x_1|^2 / 2
+    (n the dynamics' input points): it falls without bound as s -> 0. With Gamma priors of shape
+    a > 1 on the rescaled hyperparameters it rises again."""
+    p, v, w = _problem(lengths=lengths, seed=9)
+    X, alpha, beta = unpack(v, p.N, p.latent_dim)
+    n = p.N - len(lengths)
+    x1 = float(np.sum(X[p.first_idx] ** 2))
+    f = neg_log_posterior(v, p, w, with_grad=False)
+
+    def scaled(s):
+        return pack(s * X, alpha * np.array([s * s, 1 / s ** 2, 1.0, 1 / s ** 2]), beta * np.array([1.0, 1 / s ** 2, 1.0]))
+
+    for s in (0.5, 1e-2, 1e-4):
+        expected = (p.latent_dim * n - 4) * np.log(s) + 0.5 * (s * s - 1) * x1
+        assert neg_log_posterior(scaled(s), p, w, with_grad=False) - f == pytest.approx(expected, rel=1e-8, abs=1e-7)
+    shape = np.array([2.0, 2.0, 1.0, 2.0, 1.0, 2.0, 1.0])
+    q = GPDMProblem(p.Y, list(lengths), p.latent_dim, prior_shape=shape, prior_rate=np.ones(7))
+    vals = [neg_log_posterior(scaled(s), q, w, with_grad=False) for s in (1.0, 1e-2, 1e-4, 1e-6)]
+    assert vals[3] > vals[2] > vals[1]

@@ -135,7 +135,7 @@ def problem(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("LATENTOC_CACHE", str(tmp_path_factory.mktemp("jit")))
         gpdm = learn_gpdm(synthetic_motion(24, D, seed=31, cycles=1.0, noise=0.02),
-                          GPDMSettings(latent_dim=LATENT, outer_iterations=2, max_iterations=40))
+                          GPDMSettings(latent_dim=LATENT, max_iterations=40))
         pb = Problem(gpdm)
         yield pb, pb.reference()
 

@@ -10,7 +10,7 @@ from latentoc.nlp.evaluators import MeanEvaluator, VarianceEvaluator
 
 def _gpdm():
     return learn_gpdm(synthetic_motion(30, 5, seed=11, cycles=1.0, noise=0.02),
-                      GPDMSettings(latent_dim=2, outer_iterations=2, max_iterations=40))
+                      GPDMSettings(latent_dim=2, max_iterations=40))
 
 
 def test_mean_and_variance_evaluators_match_casadi():

@@ -22,13 +22,13 @@ def arm():
 @pytest.fixture(scope="module")
 def gpdm3(arm):
     _, _, Q = arm
-    return learn_gpdm(Q[::6], GPDMSettings(latent_dim=3, outer_iterations=1, max_iterations=20))
+    return learn_gpdm(Q[::6], GPDMSettings(latent_dim=3, max_iterations=20))
 
 
 @pytest.fixture(scope="module")
 def gpdm2(arm):
     _, _, Q = arm
-    return learn_gpdm(Q[::6], GPDMSettings(latent_dim=2, outer_iterations=1, max_iterations=20))
+    return learn_gpdm(Q[::6], GPDMSettings(latent_dim=2, max_iterations=20))
 
 
 def check_png(path, name, rows=1):

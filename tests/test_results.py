@@ -34,7 +34,7 @@ def test_result_json_has_the_core_fields_of_every_kind(tmp_path):
     assert data["schema_version"] == SCHEMA_VERSION
     assert {"problem", "kind", "method", "status", "success", "iterations", "cost_initial", "cost", "gain_pct",
             "times", "tube", "violations", "environment", "settings", "details"} <= set(data)
-    assert set(data["environment"]) == {"latentoc", "casadi", "pinocchio", "numpy", "python", "cpu", "cpu_count",
+    assert set(data["environment"]) == {"latentoc", "casadi", "pinocchio", "numpy", "scipy", "python", "cpu", "cpu_count",
                                         "threads"}
     assert data["environment"]["pinocchio"] == pin.__version__
 
@@ -44,7 +44,7 @@ def test_gpdm_travels_with_the_result(tmp_path):
 
     rng = np.random.default_rng(0)
     Y = np.cumsum(rng.standard_normal((20, 4)), axis=0)
-    gp = learn_gpdm(Y, GPDMSettings(latent_dim=2, outer_iterations=1, max_iterations=5))
+    gp = learn_gpdm(Y, GPDMSettings(latent_dim=2, max_iterations=5))
     names = [p.name for p in make_result(gpdm=gp).save(tmp_path)]
     assert names == [RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME]
     back = load_result(tmp_path).gpdm

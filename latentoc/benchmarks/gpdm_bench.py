@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.balanced:
         settings.balanced = True
     print(f"GPDM learning benchmark (d=3, balanced={settings.balanced}, "
-          f"outer_iterations={settings.outer_iterations}, max_iterations={settings.max_iterations})")
+          f"ftol={settings.ftol:g}, max_iterations={settings.max_iterations})")
     print(f"{'N':>5} {'D':>4} {'time [s]':>9} {'objective':>13} {'rec. RMS':>9} {'roughness':>9}")
     for N, D in sizes:
         Y = synthetic_motion(N, D, seed=0)

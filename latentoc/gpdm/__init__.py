@@ -2,5 +2,6 @@
 
 from .learning import GPDMInputError, GPDMSettings, learn_gpdm
 from .model import GPDM
+from .cache import learned_gpdm  # noqa: E402  (after learning and model, which it uses)
 
-__all__ = ["GPDM", "GPDMSettings", "learn_gpdm", "GPDMInputError"]
+__all__ = ["GPDM", "GPDMSettings", "learn_gpdm", "learned_gpdm", "GPDMInputError"]

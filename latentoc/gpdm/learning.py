@@ -1,45 +1,31 @@
-"""GPDM learning: minimise the negative log posterior of Eq. 16 (Kang & Park
-2015, Sect. 3.1.1), following the structure of Wang et al.'s reference GPDM
-code.
+"""GPDM learning: the MAP estimate of Eq. 16 (Kang & Park 2015, Sect. 3.1.1) with proper
+hyperparameter priors, iterated until it converges (docs/gpdm.md has the measurements).
+
+The model (the same for every problem, :class:`GPDMSettings` defaults):
+
+* Eq. 16's p(theta) ~ 1/theta priors make the MAP degenerate: L has no minimum (a latent
+  rescaling X -> sX with alpha, beta_2 following lowers L by (d n - 4) ln(1/s), n the dynamics'
+  input points; an unneeded
+  kernel term's amplitude runs to 0; on noise-free data the noise precisions run to infinity).
+  Every learned hyperparameter (alpha_1..3, beta_2, beta_3) gets instead the same weak
+  Gamma(2, 1) prior (mode 1): P(theta) = -ln theta + theta; the dynamics' noise precision
+  alpha_4 a wider Gamma(2, 0.01) (mode 100).
+* beta_1 = 1: Eq. 16 is exactly invariant under (beta_1, beta_3, W) -> (c beta_1, beta_3 / c,
+  W / sqrt c), so W carries the data's scale and sigma^2 (Eq. 19) is in units of the signal
+  variance.
 
 Procedure (:func:`learn_gpdm`):
 
 1. Stack the training sequences, subtract the column means.
-2. Initialise X by PCA (scores scaled so that the first latent coordinate has
-   unit standard deviation), alpha = (0.9, 1, 0.1, e), beta = (1, 1, e).
-3. ``outer_iterations`` times: set W in closed form
-   (w_d = sqrt(N / (y_d^T K_Y^-1 y_d + 1/kappa^2)), kappa^2 = 1e6), then run
-   L-BFGS-B for at most ``max_iterations`` iterations on (X, ln alpha, ln beta)
-   with the exact gradient of :mod:`latentoc.gpdm.objective`.
-4. A final closed-form W update; the recorded objective uses that W.
+2. X from PCA (scores scaled so that the first latent coordinate has unit standard
+   deviation), alpha = (0.9, 1, 0.1, e), beta = (1, 1, e).
+3. W profiled out in closed form (:mod:`latentoc.gpdm.objective`); a damped saddle-free Newton
+   method (:mod:`latentoc.gpdm.newton`) on X and the free log-hyperparameters with the exact
+   gradient, until the Newton decrement (the decrease of L a Newton step predicts) is at most
+   ``ftol`` |L|. Reaching ``max_iterations``, or a hyperparameter on ``log_hyper_bound``, is
+   reported as not converged (:class:`~latentoc.gpdm.model.LearningReport`).
 
-Balanced GPDM (Urtasun et al. 2006): the dynamics term is multiplied by
-lambda = D/d (``balanced=True``).  Default: ``balanced=False``, chosen by
-measurement.  Data: the benchmark's smooth motion (N = 150, D = 37, d = 3) and
-the tests' latent circle (N = 80, D = 20, d = 2, tanh of a random linear map),
-each with white noise of std 0.01, 0.05, 0.2 and known noise-free signal.
-Measures: roughness r = mean|Delta^2 x| / mean|Delta x| of the latent
-trajectory (:func:`roughness`; PCA gives 0.16-1.25 on these data) and the RMS
-of mu_Q(X) against the noise-free signal ("clean RMS").  Converged runs
-(10 outer x 200 iterations), plain vs balanced, r and clean RMS:
-
-=========  ======  ===============  ===============
-data       noise   plain r / RMS    balanced r / RMS
-=========  ======  ===============  ===============
-motion     0.01    0.105 / 0.0028   0.129 / 0.0032
-circle     0.01    0.170 / 0.0045   0.305 / 0.0049
-motion     0.05    0.138 / 0.0148   0.189 / 0.0185
-circle     0.05    0.172 / 0.0212   0.160 / 0.0229
-motion     0.20    0.122 / 0.0499   0.166 / 0.0775
-circle     0.20    0.160 / 0.0842   0.201 / 0.0591
-=========  ======  ===============  ===============
-
-The plain GPDM was smoother in 5 of 6 cases and closer to the noise-free
-signal in 5 of 6; the balanced model fits the noisy training poses more
-closely (lower training RMS, smaller learned noise), i.e. it overfits the
-noise, and did not give smoother latent trajectories here.  The default
-budget (5 x 60 iterations) shows the same pattern.  Both are smooth relative
-to PCA; for mocap with D >> d the balanced variant remains available.
+Balanced GPDM (Urtasun et al. 2006): the dynamics term times lambda = D/d (``balanced=True``).
 """
 
 from __future__ import annotations
@@ -48,19 +34,19 @@ import ctypes
 import json
 import time
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, fields
 from typing import TYPE_CHECKING, Iterator, Sequence
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..errors import LatentocError
-from .objective import KAPPA_SQ, GPDMProblem, neg_log_posterior, optimal_w, pack, unpack
+from .newton import minimize_newton
+from .objective import HYPER_NAMES, KAPPA_SQ, GPDMProblem, neg_log_posterior, optimal_w, pack, unpack
 
 if TYPE_CHECKING:  # pragma: no cover
     from .model import GPDM
 
-__all__ = ["GPDMSettings", "GPDMInputError", "learn_gpdm", "prepare_data",
+__all__ = ["GPDMSettings", "GPDMInputError", "learn_gpdm", "learning_problem", "prepare_data",
            "pca_initialization", "roughness"]
 
 
@@ -68,24 +54,32 @@ class GPDMInputError(LatentocError, ValueError):
     """Invalid training data or settings for GPDM learning."""
 
 
+#: hyperparameters held fixed: beta_1 (the scale of W, module docstring)
+DEFAULT_FIXED: dict[str, float] = {"beta1": 1.0}
+#: Gamma(shape, rate) priors of the learned hyperparameters (module docstring)
+DEFAULT_GAMMA: dict[str, tuple[float, float]] = {
+    "alpha1": (2.0, 1.0), "alpha2": (2.0, 1.0), "alpha3": (2.0, 1.0), "alpha4": (2.0, 0.01),
+    "beta2": (2.0, 1.0), "beta3": (2.0, 1.0)}
+
+
 @dataclass
 class GPDMSettings:
     """Settings of :func:`learn_gpdm` (all recorded in the learned model)."""
 
     latent_dim: int = 3
-    balanced: bool = False  # see module docstring for the measurement
-    outer_iterations: int = 5
-    max_iterations: int = 60
+    balanced: bool = True  # lambda = D/d on the dynamics term (Urtasun et al. 2006)
+    # hyperparameters held at these values (HYPER_NAMES), not learned
+    fixed: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_FIXED))
+    # Gamma(shape, rate) priors replacing Eq. 16's 1/theta prior of these hyperparameters
+    gamma: dict[str, tuple[float, float]] = field(default_factory=lambda: dict(DEFAULT_GAMMA))
+    ftol: float = 1e-10  # convergence: the Newton decrement <= ftol |L| (:mod:`latentoc.gpdm.newton`)
+    max_iterations: int = 500  # Newton iterations (fresh Hessians) at most: a safety cap, then not converged
     seed: int = 0  # only used by init="random"
     init: str = "pca"  # "pca" or "random"
     kappa_sq: float = KAPPA_SQ
     alpha0: tuple[float, ...] = (0.9, 1.0, 0.1, float(np.e))
     beta0: tuple[float, ...] = (1.0, 1.0, float(np.e))
-    log_hyper_bound: float = 18.0  # |ln alpha_i|, |ln beta_i| <= this
-    # Optional upper bound on beta_3, i.e. a floor 1/beta3_max on the observation noise
-    # variance (W-scaled units).  None (default): only log_hyper_bound applies.
-    beta3_max: float | None = None
-    gtol: float = 1e-6
+    log_hyper_bound: float = 40.0  # |ln alpha_i|, |ln beta_i| <= this (a hyperparameter on it: not converged)
     blas_threads: int | None = 1  # BLAS threads during learning (None: leave as is)
 
     def to_json(self) -> str:
@@ -99,21 +93,31 @@ class GPDMSettings:
         for key in ("alpha0", "beta0"):
             if key in data:
                 data[key] = tuple(data[key])
-        return cls(**data)
+        if "gamma" in data:
+            data["gamma"] = {k: tuple(v) for k, v in data["gamma"].items()}
+        known = {f.name for f in fields(cls)}  # a model saved by an older version: its other keys dropped
+        return cls(**{k: v for k, v in data.items() if k in known})
 
 
 def _check_settings(settings: GPDMSettings) -> None:
     if not isinstance(settings.latent_dim, (int, np.integer)) or settings.latent_dim < 1:
         raise GPDMInputError(f"settings.latent_dim must be a positive integer, got {settings.latent_dim!r}")
-    if settings.outer_iterations < 1 or settings.max_iterations < 1:
-        raise GPDMInputError("settings.outer_iterations and settings.max_iterations must be >= 1")
+    if settings.max_iterations < 1 or not settings.ftol > 0:
+        raise GPDMInputError(f"settings.max_iterations must be >= 1 and settings.ftol > 0, got "
+                             f"{settings.max_iterations!r} and {settings.ftol!r}")
     if settings.init not in ("pca", "random"):
         raise GPDMInputError(f"settings.init must be 'pca' or 'random', got {settings.init!r}")
     if len(settings.alpha0) != 4 or len(settings.beta0) != 3 or min(settings.alpha0) <= 0 \
             or min(settings.beta0) <= 0:
         raise GPDMInputError("settings.alpha0 must be 4 positive numbers and settings.beta0 3 positive numbers")
-    if settings.beta3_max is not None and not settings.beta3_max > 0:
-        raise GPDMInputError(f"settings.beta3_max must be positive or None, got {settings.beta3_max!r}")
+    for name, value in settings.fixed.items():
+        if name not in HYPER_NAMES or not float(value) > 0:
+            raise GPDMInputError(f"settings.fixed: {name!r} = {value!r}; keys are {', '.join(HYPER_NAMES)}, "
+                                 "values positive")
+    for name, ab in settings.gamma.items():
+        if name not in HYPER_NAMES or len(ab) != 2 or min(ab) < 0:
+            raise GPDMInputError(f"settings.gamma: {name!r} = {ab!r}; keys are {', '.join(HYPER_NAMES)}, "
+                                 "values (shape, rate) >= 0")
 
 
 def prepare_data(Y: np.ndarray | Sequence[np.ndarray], latent_dim: int) -> tuple[np.ndarray, list[int]]:
@@ -234,10 +238,43 @@ def _blas_threads(n: int | None) -> Iterator[None]:
             set_(old)
 
 
+def _prior_arrays(settings: GPDMSettings) -> tuple[np.ndarray, np.ndarray]:
+    shape, rate = np.zeros(7), np.zeros(7)
+    for name, (a, b) in settings.gamma.items():
+        i = HYPER_NAMES.index(name)
+        shape[i], rate[i] = float(a), float(b)
+    return shape, rate
+
+
+def learning_problem(Yc: np.ndarray, lengths: list[int], settings: GPDMSettings) -> GPDMProblem:
+    """The objective :func:`learn_gpdm` minimises for centred data ``Yc`` (Eq. 16, the settings'
+    priors and balancing)."""
+    shape, rate = _prior_arrays(settings)
+    D, d = Yc.shape[1], int(settings.latent_dim)
+    return GPDMProblem(Yc, list(lengths), d, dynamics_weight=D / d if settings.balanced else 1.0,
+                       prior_shape=shape, prior_rate=rate, kappa_sq=settings.kappa_sq)
+
+
+def _initial_variables(Yc: np.ndarray, settings: GPDMSettings) -> np.ndarray:
+    N, d = Yc.shape[0], int(settings.latent_dim)
+    if settings.init == "pca":
+        X = pca_initialization(Yc, d)
+    else:
+        X = np.random.default_rng(settings.seed).standard_normal((N, d))
+    theta = np.concatenate([settings.alpha0, settings.beta0]).astype(float)
+    for name, value in settings.fixed.items():
+        theta[HYPER_NAMES.index(name)] = float(value)
+    return pack(X, theta[:4], theta[4:])
+
+
 def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | None = None,
                verbose: bool = False) -> "GPDM":
-    """Learn a GPDM from one sequence (N x D) or a list of sequences (Eq. 16)."""
-    from .model import GPDM
+    """Learn a GPDM from one sequence (N x D) or a list of sequences: minimise Eq. 16 with the
+    settings' fixed hyperparameters and priors, W profiled out, until the convergence test holds.
+
+    Module docstring: the model and the procedure.
+    """
+    from .model import GPDM, LearningReport
 
     settings = GPDMSettings() if settings is None else settings
     _check_settings(settings)
@@ -246,39 +283,48 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     N, D = Ys.shape
     Y_mean = Ys.mean(axis=0)
     Yc = Ys - Y_mean
+    problem = learning_problem(Yc, lengths, settings)
+    v0 = _initial_variables(Yc, settings)
+    free = np.ones(v0.size, dtype=bool)
+    for name in settings.fixed:
+        free[N * d + HYPER_NAMES.index(name)] = False
+    bound = float(settings.log_hyper_bound)
+    n_free_x = N * d
 
-    if settings.init == "pca":
-        X = pca_initialization(Yc, d)
-    else:
-        X = np.random.default_rng(settings.seed).standard_normal((N, d))
-    alpha = np.asarray(settings.alpha0, dtype=float)
-    beta = np.asarray(settings.beta0, dtype=float)
-    lam = D / d if settings.balanced else 1.0
-    problem = GPDMProblem(Yc, lengths, d, dynamics_weight=lam)
-    v = pack(X, alpha, beta)
-    b = float(settings.log_hyper_bound)
-    bounds = [(None, None)] * (N * d) + [(-b, b)] * 7
-    if settings.beta3_max is not None:
-        bounds[-1] = (-b, min(b, float(np.log(settings.beta3_max))))
-        v[-1] = np.clip(v[-1], *bounds[-1])
+    def full(z: np.ndarray) -> np.ndarray:
+        v = v0.copy()
+        v[free] = z
+        return v
+
+    def fg(z: np.ndarray) -> tuple[float, np.ndarray]:
+        try:
+            f, g = neg_log_posterior(full(z), problem)  # type: ignore[misc]
+        except np.linalg.LinAlgError:  # a trial point with a kernel matrix beyond repair: rejected
+            return np.inf, np.zeros_like(z)
+        return float(f), g[free]
+
+    lower = np.r_[np.full(n_free_x, -np.inf), np.full(int(free[n_free_x:].sum()), -bound)]
     t0 = time.perf_counter()
-    f = np.nan
+
+    def report_step(step: int, f: float, decrement: float) -> None:
+        if verbose:
+            print(f"step {step}: L = {f:.12g}, Newton decrement {decrement:.3g}, {time.perf_counter() - t0:.2f} s")
+
     with _blas_threads(settings.blas_threads):
-        for it in range(settings.outer_iterations):
-            X, alpha, beta = unpack(v, N, d)
-            w = optimal_w(Yc, X, beta, settings.kappa_sq)
-            res = minimize(neg_log_posterior, v, args=(problem, w), jac=True, method="L-BFGS-B",
-                           bounds=bounds,
-                           options={"maxiter": settings.max_iterations, "gtol": settings.gtol,
-                                    "maxcor": 20})
-            v = res.x
-            f = float(res.fun)
-            if verbose:
-                print(f"outer {it}: L = {f:.6g} ({res.nit} iterations, {res.message}) "
-                      f"{time.perf_counter() - t0:.2f} s")
-        X, alpha, beta = unpack(v, N, d)
-        w = optimal_w(Yc, X, beta, settings.kappa_sq)
-        f = float(neg_log_posterior(v, problem, w, with_grad=False))
+        res = minimize_newton(fg, v0[free], lower, -lower, settings.ftol, settings.max_iterations, report_step)
+    z, f, g, converged, message, decrement = res.z, res.f, res.g, res.converged, res.message, res.decrement
+    gnorm = float(np.max(np.abs(g)))
+    v = full(z)
+    X, alpha, beta = unpack(v, N, d)
+    at_bound = [name for name, lv, fr in zip(HYPER_NAMES, v[n_free_x:], free[n_free_x:])
+                if fr and abs(lv) >= bound]
+    if at_bound:
+        message += f"; at the bound |ln theta| = {bound:g}: {', '.join(at_bound)}"
+    report = LearningReport(iterations=res.steps, evaluations=res.evaluations, gradient_norm=gnorm,
+                            newton_decrement=decrement,
+                            converged=bool(converged and not at_bound), message=message,
+                            time_s=time.perf_counter() - t0)
+    w = optimal_w(Yc, X, beta, settings.kappa_sq)
     return GPDM(X=np.array(X), sequence_lengths=list(lengths), alpha=np.array(alpha),
                 beta=np.array(beta), W=np.array(w), Y_mean=Y_mean, Y=Ys,
-                settings=settings, objective_value=f)
+                settings=settings, objective_value=float(f), learning=report)

@@ -18,7 +18,8 @@ Conventions:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import json
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,7 +32,22 @@ from .objective import safe_cholesky, sequence_indices
 if TYPE_CHECKING:  # pragma: no cover
     import casadi
 
-__all__ = ["GPDM"]
+__all__ = ["GPDM", "LearningReport"]
+
+
+@dataclass(frozen=True)
+class LearningReport:
+    """How learning (Eq. 16) ended: Newton iterations and objective evaluations, the final max |dL/dv|
+    over the free variables and Newton decrement (the decrease of L a Newton step predicts), whether
+    the convergence test held (never at the safety cap or a bound), the last message and the time (s)."""
+
+    iterations: int = 0
+    evaluations: int = 0
+    gradient_norm: float = float("nan")
+    newton_decrement: float = float("nan")
+    converged: bool = False
+    message: str = ""
+    time_s: float = 0.0
 
 
 def _as_points(x: np.ndarray, d: int) -> tuple[np.ndarray, bool]:
@@ -56,6 +72,7 @@ class GPDM:
     Y: np.ndarray  # N x D original (uncentred) training data
     settings: Any  # GPDMSettings
     objective_value: float
+    learning: LearningReport = field(default_factory=LearningReport)
     _cache: dict = field(default_factory=dict, init=False, repr=False)
 
     # ------------------------------------------------------------------ basics
@@ -71,6 +88,13 @@ class GPDM:
     def noise_variance(self) -> float:
         """Observation noise variance 1/beta3 (in W-scaled units)."""
         return float(1.0 / self.beta[2])
+
+    def learning_summary(self) -> dict[str, float | int | bool]:
+        """How learning ended, as solve results report it (``gpdm_*`` keys; :class:`LearningReport`)."""
+        r = self.learning
+        return {"gpdm_objective": float(self.objective_value), "gpdm_iterations": int(r.iterations),
+                "gpdm_evaluations": int(r.evaluations), "gpdm_gradient_norm": float(r.gradient_norm),
+                "gpdm_newton_decrement": float(r.newton_decrement), "gpdm_converged": bool(r.converged)}
 
     def latent_trajectories(self) -> list[np.ndarray]:
         """The latent trajectory of each training sequence (N_i x d arrays)."""
@@ -208,7 +232,8 @@ class GPDM:
         np.savez(Path(path), X=self.X, sequence_lengths=np.asarray(self.sequence_lengths, dtype=np.int64),
                  alpha=self.alpha, beta=self.beta, W=self.W, Y_mean=self.Y_mean, Y=self.Y,
                  objective_value=np.float64(self.objective_value),
-                 settings_json=np.str_(self.settings.to_json()))
+                 settings_json=np.str_(self.settings.to_json()),
+                 learning_json=np.str_(json.dumps(asdict(self.learning))))
 
     @classmethod
     def load(cls, path: str | Path) -> "GPDM":
@@ -216,7 +241,9 @@ class GPDM:
         from .learning import GPDMSettings
 
         with np.load(Path(path), allow_pickle=False) as f:
+            learning = LearningReport(**json.loads(str(f["learning_json"]))) if "learning_json" in f \
+                else LearningReport(message="not recorded")
             return cls(X=f["X"], sequence_lengths=[int(n) for n in f["sequence_lengths"]],
                        alpha=f["alpha"], beta=f["beta"], W=f["W"], Y_mean=f["Y_mean"], Y=f["Y"],
                        settings=GPDMSettings.from_json(str(f["settings_json"])),
-                       objective_value=float(f["objective_value"]))
+                       objective_value=float(f["objective_value"]), learning=learning)

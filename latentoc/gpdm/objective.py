@@ -10,14 +10,24 @@ The value returned by :func:`neg_log_posterior` is (constants dropped)::
 
     L = lam * [ d/2 ln|K_X| + 1/2 tr(K_X^-1 X_out X_out^T) ]
         + D/2 ln|K_Y| + 1/2 tr(K_Y^-1 Y W^2 Y^T) - N ln|W|
-        + sum_i ln alpha_i + sum_i ln beta_i + 1/2 sum_s |x_1^(s)|^2
+        + sum_i P(alpha_i) + sum_i P(beta_i) + 1/2 sum_s |x_1^(s)|^2
 
 i.e. Eq. 16 plus the N(0, I) prior on the first latent point of every sequence
 (the ``p(x_1)`` factor of Eq. 14).  ``lam`` is 1 for the plain GPDM and D/d for
 the balanced GPDM of Urtasun et al. (2006).  With several sequences, X_in and
 X_out are built per sequence (:func:`sequence_indices`) and K_X is the kernel
-matrix of the stacked X_in.  The N(0, kappa^2) prior on w used by
-:func:`optimal_w` is not part of L (w is fixed during the inner optimisation).
+matrix of the stacked X_in.
+
+Hyperparameter priors: P(theta) = -(a - 1) ln theta + b theta, the negative log
+of a Gamma(a, b) density (shape a, rate b).  a = b = 0 is Eq. 16's improper
+p(theta) ~ 1/theta, i.e. P = ln theta (:attr:`GPDMProblem.prior_shape`,
+:attr:`GPDMProblem.prior_rate`, default zero).
+
+W: given (``w`` passed) it is held fixed.  With ``w=None`` it is profiled out:
+w_d = sqrt(N / (y_d^T K_Y^-1 y_d + 1/kappa^2)) (:func:`optimal_w`) minimises
+L + sum_d w_d^2 / (2 kappa^2) (a N(0, kappa^2) prior on each w_d), and that
+profiled value, whose gradient is the partial gradient at the optimal w
+(envelope theorem), is returned.
 
 Gradient in matrix form: with G = dL/dK = 1/2 (c K^-1 - K^-1 T T^T K^-1)
 (c = D, T = Y W for K_Y; c = d, T = X_out for K_X) the derivative with respect to
@@ -44,9 +54,12 @@ __all__ = [
     "neg_log_posterior",
     "optimal_w",
     "KAPPA_SQ",
+    "HYPER_NAMES",
 ]
 
 KAPPA_SQ = 1e6
+#: the order of the hyperparameters in the packed vector (Eq. 15, Eq. 11)
+HYPER_NAMES = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2", "beta3")
 
 
 def sequence_indices(sequence_lengths: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -75,6 +88,9 @@ class GPDMProblem:
     sequence_lengths: list[int]
     latent_dim: int
     dynamics_weight: float = 1.0  # lambda (D/d for balanced GPDM)
+    prior_shape: np.ndarray | None = None  # (7,) Gamma shapes a (HYPER_NAMES order); None: 0
+    prior_rate: np.ndarray | None = None  # (7,) Gamma rates b; None: 0 (Eq. 16)
+    kappa_sq: float = KAPPA_SQ  # variance of the N(0, kappa^2) prior on w (profiled W only)
     in_idx: np.ndarray = field(init=False)
     out_idx: np.ndarray = field(init=False)
     first_idx: np.ndarray = field(init=False)
@@ -82,6 +98,10 @@ class GPDMProblem:
     def __post_init__(self) -> None:
         self.Y = np.asarray(self.Y, dtype=float)
         self.in_idx, self.out_idx, self.first_idx = sequence_indices(self.sequence_lengths)
+        self.prior_shape = np.zeros(7) if self.prior_shape is None else np.asarray(self.prior_shape, float)
+        self.prior_rate = np.zeros(7) if self.prior_rate is None else np.asarray(self.prior_rate, float)
+        if self.prior_shape.shape != (7,) or self.prior_rate.shape != (7,):
+            raise ValueError("prior_shape and prior_rate need one value per hyperparameter (7)")
 
     @property
     def N(self) -> int:
@@ -131,17 +151,19 @@ def chol_inverse(L: np.ndarray) -> np.ndarray:
     return Kinv
 
 
-def _gp_term(K: np.ndarray, T: np.ndarray, c: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """c/2 ln|K| + 1/2 tr(K^-1 T T^T), dL/dK = 1/2 (c K^-1 - K^-1 T T^T K^-1) and K^-1 T."""
+def _factor(K: np.ndarray) -> tuple[float, np.ndarray]:
+    """1/2 ln|K| and K^-1 (via a Cholesky factor, jitter if needed)."""
     L, _ = safe_cholesky(K)
-    Kinv = chol_inverse(L)
-    B = Kinv @ T
-    val = c * np.sum(np.log(np.diag(L))) + 0.5 * float(np.sum(T * B))
+    return float(np.sum(np.log(np.diag(L)))), chol_inverse(L)
+
+
+def _gp_grad(Kinv: np.ndarray, B: np.ndarray, c: float) -> np.ndarray:
+    """dL/dK = 1/2 (c K^-1 - B B^T) with B = K^-1 T (overwrites Kinv)."""
     G = B @ B.T
     G *= -0.5
     Kinv *= 0.5 * c
     G += Kinv
-    return val, G, B
+    return G
 
 
 def _rbf(R2: np.ndarray, s1: float, s2: float) -> np.ndarray:
@@ -157,12 +179,13 @@ def _rbf_point_grad(M: np.ndarray, X: np.ndarray, b2: float) -> np.ndarray:
     return -2.0 * b2 * (np.sum(M, axis=1)[:, None] * X - M @ X)
 
 
-def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray,
+def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray | None = None,
                       with_grad: bool = True) -> tuple[float, np.ndarray] | float:
-    """Eq. 16 (+ first-point prior, optional balancing) and its exact gradient.
+    """Eq. 16 (+ first-point prior, hyperparameter priors, optional balancing) and its exact gradient.
 
     Parameters: ``v`` packed variables (:func:`pack`), ``problem`` the data,
-    ``w`` the per-dimension scales (D,).  Returns ``(L, dL/dv)`` or ``L``.
+    ``w`` the per-dimension scales (D,) or None to profile them out (module
+    docstring).  Returns ``(L, dL/dv)`` or ``L``.
 
     The length-scale derivatives use the identity
     sum_ij M_ij |x_i - x_j|^2 = -sum_i x_i . g_i / b2, where g is the point
@@ -170,7 +193,6 @@ def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray,
     """
     N, D, d = problem.N, problem.D, problem.latent_dim
     X, alpha, beta = unpack(np.asarray(v, dtype=float), N, d)
-    w = np.asarray(w, dtype=float)
     lam = float(problem.dynamics_weight)
 
     # ---- observation term (Eq. 10, 11)
@@ -178,8 +200,18 @@ def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray,
     EY = _rbf(sq_dist(X), b1, b2)
     KY = EY.copy()
     KY[np.diag_indices(N)] += 1.0 / b3
-    YW = problem.Y * w[None, :]
-    valY, GY, _ = _gp_term(KY, YW, float(D))
+    half_logdet_Y, KYinv = _factor(KY)
+    if w is None:  # profiled: w_d = sqrt(N / (q_d + 1/kappa^2))
+        B0 = KYinv @ problem.Y
+        q = np.sum(problem.Y * B0, axis=0)
+        w = np.sqrt(N / (q + 1.0 / problem.kappa_sq))
+        BY = B0 * w[None, :]
+        valY = D * half_logdet_Y + 0.5 * float(np.sum(w * w * (q + 1.0 / problem.kappa_sq)))
+    else:
+        w = np.asarray(w, dtype=float)
+        BY = KYinv @ (problem.Y * w[None, :])
+        valY = D * half_logdet_Y + 0.5 * float(np.sum((problem.Y * w[None, :]) * BY))
+    GY = _gp_grad(KYinv, BY, float(D))
 
     # ---- dynamics term (Eq. 14, 15)
     a1, a2, a3, a4 = alpha
@@ -191,23 +223,29 @@ def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray,
     KX *= a3
     KX += EX
     KX[np.diag_indices(n_in)] += 1.0 / a4
-    valX, GX, BX = _gp_term(KX, Xout, float(d))
+    half_logdet_X, KXinv = _factor(KX)
+    BX = KXinv @ Xout
+    valX = d * half_logdet_X + 0.5 * float(np.sum(Xout * BX))
+    GX = _gp_grad(KXinv, BX, float(d))
 
+    theta = np.concatenate([alpha, beta])
+    a_p, b_p = np.asarray(problem.prior_shape, float), np.asarray(problem.prior_rate, float)  # arrays after __post_init__
     X1 = X[problem.first_idx]
     f = (valY + lam * valX - N * float(np.sum(np.log(w)))
-         + float(np.sum(np.log(alpha)) + np.sum(np.log(beta)))
+         + float(np.sum(-(a_p - 1.0) * np.log(theta) + b_p * theta))
          + 0.5 * float(np.sum(X1 * X1)))
     if not with_grad:
         return f
 
-    # ---- gradient
+    # ---- gradient (the prior's d/d ln theta = -(a - 1) + b theta)
+    g_prior = -(a_p - 1.0) + b_p * theta
     EY *= GY  # M_Y = G_Y o E_Y
     gY = _rbf_point_grad(EY, X, b2)
     g_lb = np.array([
-        np.sum(EY) + 1.0,
-        0.5 * float(np.sum(X * gY)) + 1.0,
-        -np.trace(GY) / b3 + 1.0,
-    ])
+        np.sum(EY),
+        0.5 * float(np.sum(X * gY)),
+        -np.trace(GY) / b3,
+    ]) + g_prior[4:]
     gX = gY
 
     EX *= GX  # M_X / lam
@@ -216,11 +254,11 @@ def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray,
     gX[problem.in_idx] += lam * (g_rbf_in + 2.0 * a3 * GXin)
     gX[problem.out_idx] += lam * BX
     g_la = np.array([
-        lam * np.sum(EX) + 1.0,
-        0.5 * lam * float(np.sum(Xin * g_rbf_in)) + 1.0,
-        lam * a3 * float(np.sum(Xin * GXin)) + 1.0,
-        -lam * np.trace(GX) / a4 + 1.0,
-    ])
+        lam * np.sum(EX),
+        0.5 * lam * float(np.sum(Xin * g_rbf_in)),
+        lam * a3 * float(np.sum(Xin * GXin)),
+        -lam * np.trace(GX) / a4,
+    ]) + g_prior[:4]
     gX[problem.first_idx] += X1
     return f, np.concatenate([gX.ravel(), g_la, g_lb])
 

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from ..dynamics import SymbolicModel
 from ..errors import ProblemError, SolveError
-from ..gpdm import GPDM, GPDMSettings, learn_gpdm
+from ..gpdm import GPDM, GPDMSettings, learned_gpdm
 from ..latent.gp_layer import GPLayer
 from ..nlp.blocks import RobotBlock, compile_blocks
 from ..problem import TUBE, Problem
@@ -90,7 +90,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     if not (isinstance(stride, (int, np.integer)) and not isinstance(stride, bool) and 1 <= stride <= len(tr.t) // 4):
         raise ValueError(f"training stride must be an integer from 1 to {len(tr.t) // 4} (frames), got {stride!r}")
     Ys = [t.Y[::stride] for t in trs]
-    gp = learn_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
+    gp = learned_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = FootGeometry.from_standing(model, tr.Q[0])
     phases = training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
@@ -306,6 +306,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
               "tube_relative": delta * js.gpdm.beta[2], "latent_dim": js.gpdm.latent_dim,
               "max_sigma2": float(np.max(traj["sigma2"])), "control_points": s.n_control,
               "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
+              **js.gpdm.learning_summary(),
               "cost_initial": js.distance_training, "cost": r["distance"],
               "cost_meaning": "jump distance of the toe tip in metres (maximised, Eq. 33)",
               "friction": s.mu, "restitution_paper": 0.5, "restitution_used": 0.0,
