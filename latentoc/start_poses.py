@@ -20,6 +20,8 @@ from typing import Any, Sequence
 import numpy as np
 import pinocchio as pin
 
+from .errors import SolveError
+
 from .gpdm import GPDM
 
 __all__ = ["radial_direction", "tube_boundary_point", "start_pose_distances"]
@@ -59,7 +61,8 @@ def tube_boundary_point(gpdm: GPDM, x0: np.ndarray, direction: np.ndarray, delta
             break
         r_lo, r = r, r + step
     else:
-        raise ValueError(f"sigma^2 stays below delta = {delta:g} within distance {max_distance} of x0")
+        raise SolveError(f"tube {delta:g}: sigma^2 stays below it within distance {max_distance} of the start "
+                         f"(sigma^2 <= {gpdm.variance(x0 + max_distance * u):.4g} there, its limit b1 + 1/b3)")
     lo, hi = r_lo, r
     for _ in range(60):
         mid = 0.5 * (lo + hi)
