@@ -28,3 +28,30 @@ def test_main_job_command_follows_and_names_a_known_problem():
     match = re.match(r"python -m latentoc solve (\S+)", main_job)
     assert match, main_job
     assert match.group(1) in problem_names()
+
+
+def _reproduction_gains(section: str) -> dict[str, str]:
+    """tube -> our gain % in one table of docs/reproduction.md (written by `latentoc reproduce`)."""
+    text = (ROOT / "docs" / "reproduction.md").read_text()
+    body = text.split(section, 1)[1].split("\n## ", 1)[0]
+    head, rows = None, {}
+    for line in body.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if "ours: tube" in cells:
+            head = cells
+        elif head and len(cells) == len(head) and cells[head.index("ours: tube")] and not set(line) <= set("|- "):
+            rows[cells[head.index("ours: tube")]] = cells[head.index("ours: gain %")]
+    return rows
+
+
+def test_readme_arm_table_is_the_reproductions():
+    """The README's arm-raise gains are docs/reproduction.md's (Table 2, d = 3), digit for digit."""
+    readme = (ROOT / "README.md").read_text()
+    lines = readme.splitlines()
+    tubes = next(line for line in lines if line.startswith("| tube | 1.5x"))
+    gains = next(line for line in lines if line.startswith("| gain % (cost"))
+    def cells(line: str) -> list[str]:
+        return [c.strip() for c in line.strip().strip("|").split("|")][1:]
+
+    ours = _reproduction_gains("## Table 2")
+    assert dict(zip(cells(tubes), cells(gains))) == ours
