@@ -268,7 +268,7 @@ def test_settings_json_round_trip():
 def test_same_model_with_one_or_two_blas_threads_and_permuted_joints():
     """Converged, the model does not depend on the BLAS's thread count or on the order of the
     joint columns (Eq. 16 is invariant under permuting them): the same objective to 1e-6."""
-    Y = synthetic_motion(60, 10, seed=4, noise=0.05)
+    Y = synthetic_motion(40, 6, seed=4, noise=0.05)
     one = learn_gpdm(Y, GPDMSettings(latent_dim=3, blas_threads=1))
     two = learn_gpdm(Y, GPDMSettings(latent_dim=3, blas_threads=2))
     perm = np.random.default_rng(0).permutation(Y.shape[1])
@@ -283,8 +283,8 @@ def test_same_model_with_one_or_two_blas_threads_and_permuted_joints():
 
 def test_same_model_with_the_sequences_in_either_order():
     """Two sequences given in the other order are the same data: the same objective to 1e-6."""
-    Y = synthetic_motion(80, 8, seed=6, noise=0.05)
-    a, b = Y[:45], Y[45:]
+    Y = synthetic_motion(60, 6, seed=6, noise=0.05)
+    a, b = Y[:33], Y[33:]
     ab = learn_gpdm([a, b], GPDMSettings(latent_dim=2))
     ba = learn_gpdm([b, a], GPDMSettings(latent_dim=2))
     assert ab.learning.converged and ba.learning.converged
