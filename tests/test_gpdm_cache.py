@@ -1,6 +1,7 @@
 """Learned GPDMs on disk: the second call reads the model the first one learned, other data or
 settings learn their own, and a damaged file is learned again."""
 import numpy as np
+import pytest
 
 from latentoc.benchmarks.gpdm_bench import synthetic_motion
 from latentoc.gpdm import GPDMSettings, learn_gpdm, learned_gpdm
@@ -32,3 +33,38 @@ def test_a_damaged_file_is_learned_again(tmp_path, monkeypatch):
     path.write_bytes(b"not a model")
     model = learned_gpdm(Y, settings)
     assert model.learning.converged and learned_gpdm(Y, settings).objective_value == model.objective_value
+
+
+def test_shipped_models_are_converged_minima_of_their_data():
+    """Each model in latentoc/models/ is named by its data and settings, and is a converged minimum
+    of Eq. 16 for them: the Newton decrement, from a fresh Hessian of the exact gradient, is within
+    the settings' ftol |L| (what learning it again would stop at)."""
+    from latentoc.gpdm import GPDM
+    from latentoc.gpdm.cache import SHIPPED
+    from latentoc.gpdm.learning import learning_problem
+    from latentoc.gpdm.newton import fd_hessian
+    from latentoc.gpdm.objective import HYPER_NAMES, neg_log_posterior, pack
+
+    files = sorted(SHIPPED.glob("gpdm_*.npz"))
+    assert files, "the broad jump's model ships with the package"
+    for path in files:
+        m = GPDM.load(path)
+        starts = np.cumsum([0] + m.sequence_lengths)
+        seqs = [m.Y[a:b] for a, b in zip(starts[:-1], starts[1:])]
+        assert model_path(seqs[0] if len(seqs) == 1 else seqs, m.settings).name == path.name
+        p = learning_problem(m.Y - m.Y_mean, m.sequence_lengths, m.settings)
+        v = pack(m.X, m.alpha, m.beta)
+        free = np.ones(v.size, dtype=bool)
+        for name in m.settings.fixed:
+            free[v.size - 7 + HYPER_NAMES.index(name)] = False
+
+        def grad(z, v=v, free=free, p=p):
+            w = v.copy()
+            w[free] = z
+            return neg_log_posterior(w, p)[1][free]
+
+        f, g = neg_log_posterior(v, p)[0], grad(v[free])
+        assert f == pytest.approx(m.objective_value, rel=1e-12) and m.learning.converged
+        lam, V = np.linalg.eigh(fd_hessian(grad, v[free], g))
+        a = np.maximum(np.abs(lam), 1e-8 * np.abs(lam).max())
+        assert 0.5 * np.sum((V.T @ g) ** 2 / a) <= 10 * m.settings.ftol * abs(f)

@@ -2,7 +2,9 @@
 settings give the same model, and a problem learns its model once per machine, not per process.
 
 Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.nlp.jit.cache_dir`), the key a
-hash of the learner's version, the training sequences and the settings.
+hash of the learner's version, the training sequences and the settings. The package ships the
+models of its slow-to-learn problems (the broad jump's, about 2 min) under the same names in
+``latentoc/models/``; tests/test_gpdm_cache.py checks each is a converged minimum of its data.
 """
 
 from __future__ import annotations
@@ -19,7 +21,10 @@ from ..nlp.jit import cache_dir
 from .learning import GPDMSettings, learn_gpdm
 from .model import GPDM
 
-__all__ = ["LEARNER_VERSION", "learned_gpdm", "model_path"]
+__all__ = ["LEARNER_VERSION", "SHIPPED", "learned_gpdm", "model_path"]
+
+#: models shipped with the package (module doc)
+SHIPPED = Path(__file__).resolve().parent.parent / "models"
 
 #: bump when learning changes what it returns for the same data and settings
 LEARNER_VERSION = 1
@@ -38,11 +43,12 @@ def model_path(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) -> 
 def learned_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) -> GPDM:
     """:func:`learn_gpdm` of ``Y``, read from the cache when it was learned before on this machine."""
     path = model_path(Y, settings)
-    if path.exists():
-        try:
-            return GPDM.load(path)
-        except (OSError, ValueError, KeyError):  # a damaged file: learned again and replaced
-            pass
+    for known in (path, SHIPPED / path.name):
+        if known.exists():
+            try:
+                return GPDM.load(known)
+            except (OSError, ValueError, KeyError):  # a damaged file: learned again and replaced
+                pass
     model = learn_gpdm(Y, settings)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
