@@ -22,8 +22,6 @@ and ``[goal]`` adds an end-effector goal (:mod:`latentoc.kinds.goal`).
 """
 from __future__ import annotations
 
-import hashlib
-import json
 import time
 from dataclasses import fields
 from typing import Any
@@ -34,6 +32,7 @@ import pinocchio as pin
 from .dynamics import SymbolicModel
 from .errors import ProblemError, SolveError
 from .gpdm import GPDM, GPDMSettings, learned_gpdm
+from .gpdm.cache import model_path
 from .kinds.goal import goal_error
 from .kinds.min_torque import (METHODS, MinTorqueNLP, MinTorqueSettings, ipopt_options, joint_range_nlp,
                                latent_nlp, sampled_motion, violated_times)
@@ -164,8 +163,7 @@ def problem_gpdm(problem: Problem) -> tuple[GPDM, float]:
     """The problem's GPDM and its learning time (s); learned once per training data + settings."""
     settings = gpdm_settings(problem)
     _, Q = training_motion(problem)
-    digest = hashlib.sha256(np.ascontiguousarray(Q).tobytes()).hexdigest()
-    key = json.dumps([digest, Q.shape, settings.to_json()])
+    key = model_path(Q, settings).name  # the disk cache's key: data and settings
     if key not in _GPDM_CACHE:
         t0 = time.perf_counter()
         model = learned_gpdm(Q, settings)

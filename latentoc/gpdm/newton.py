@@ -5,7 +5,7 @@ Each step takes the Hessian by forward differences of the exact gradient, its ei
 positive (|lambda|, so that saddle directions are descended), and the Levenberg step
 s = -V diag(1 / (|lambda| + mu)) V^T g; mu follows the ratio of the actual to the predicted decrease
 (a trust region in the Hessian's metric). It stops when the Newton decrement 1/2 g^T |H|^-1 g, the
-decrease a Newton step predicts, is at most ``ftol`` |L|. A few tens of steps, each far from
+decrease a Newton step predicts, is at most ``ftol`` |L|. Tens of iterations, each far from
 rounding noise, so the same data give the same model on any BLAS, thread count or library version.
 """
 
