@@ -115,3 +115,51 @@ def test_callbacks_are_counted_and_timed_and_options_reach_ipopt(capfd):
     assert "Ipopt" not in capfd.readouterr().out
     with pytest.raises(RuntimeError):
         ipopt.solve(nlp, np.zeros(N), **bounds, options={"no_such_ipopt_option": 1.0})
+
+
+def _interrupting(nlp, after: int):
+    """``nlp`` whose Hessian sends this process SIGINT (Ctrl-C) at its ``after``-th call."""
+    import signal
+
+    calls = {"n": 0}
+    hessian = nlp.hessian
+
+    def hess(w, sigma, lam):
+        calls["n"] += 1
+        if calls["n"] == after:
+            signal.raise_signal(signal.SIGINT)
+        return hessian(w, sigma, lam)
+
+    nlp.hessian = hess
+    return calls
+
+
+def test_ctrl_c_inside_ipopt_raises_instead_of_a_result(monkeypatch, tmp_path):
+    """CasADi turns an exception inside a callback into the status NonIpopt_Exception_Thrown and
+    returns a point; the solve must raise KeyboardInterrupt instead, and stop at once."""
+    nlp, bounds, _, _ = _circle(monkeypatch, tmp_path)
+    calls = _interrupting(nlp, after=2)
+    with pytest.raises(KeyboardInterrupt):
+        ipopt.solve(nlp, np.zeros(N), **bounds)
+    assert calls["n"] == 2  # no iteration after the interrupt
+
+
+def test_a_failing_callback_raises_its_error(monkeypatch, tmp_path):
+    nlp, bounds, _, _ = _circle(monkeypatch, tmp_path)
+
+    def broken(w):
+        raise ZeroDivisionError("in the constraints")
+
+    nlp.constraints = broken
+    with pytest.raises(ZeroDivisionError, match="in the constraints"):
+        ipopt.solve(nlp, np.zeros(N), **bounds)
+
+
+def test_history_is_ipopts_log():
+    """One entry per iteration (0 = the start) with the objective at the returned point last."""
+    nlp, bounds, w_opt, _ = _qp()
+    res = ipopt.solve(nlp, np.zeros(N), **bounds)
+    h = res.history
+    assert len(h["objective"]) == res.iterations + 1 == len(h["inf_pr"]) == len(h["mu"]) == len(h["iter"])
+    assert h["objective"][-1] == pytest.approx(res.f, rel=1e-9)
+    assert h["inf_pr"][0] > 1e-3 and h["inf_pr"][-1] < 1e-8  # the start violates A w = b; the end does not

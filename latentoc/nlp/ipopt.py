@@ -44,6 +44,8 @@ class IpoptResult:
     time_s: float
     timings: dict[str, float] = field(default_factory=dict)  # wall seconds per callback kind
     calls: dict[str, int] = field(default_factory=dict)  # evaluations per callback kind
+    # per iteration (Ipopt's log): iter, objective, inf_pr, inf_du, mu, alpha_pr, alpha_du
+    history: dict[str, list[float]] = field(default_factory=dict)
 
     def multipliers(self) -> dict[str, np.ndarray]:
         """The point and multipliers a warm start of a neighbouring problem takes."""
@@ -70,12 +72,24 @@ def load_ipopt() -> None:
     _IPOPT_LOADED = True
 
 
+class _Raised:
+    """The first exception raised inside a callback (Ctrl-C included): CasADi would report it as
+    the solver status NonIpopt_Exception_Thrown, so :func:`solve` raises it again afterwards."""
+
+    def __init__(self) -> None:
+        self.error: BaseException | None = None
+
+    def record(self, exc: BaseException) -> None:
+        if self.error is None:
+            self.error = exc
+
+
 class _Callback(ca.Callback):
     def __init__(self, name: str, fn: Callable, ins: list[tuple[str, ca.Sparsity]], outs: list[tuple[str, ca.Sparsity]],
-                 timings: dict[str, float], calls: dict[str, int], jac_x: ca.Sparsity | None = None):
+                 timings: dict[str, float], calls: dict[str, int], raised: _Raised, jac_x: ca.Sparsity | None = None):
         ca.Callback.__init__(self)
         self._fn, self._ins, self._outs, self._timings, self._calls = fn, ins, outs, timings, calls
-        self._jac_x = jac_x
+        self._jac_x, self._raised = jac_x, raised
         # finite differences only so that CasADi can build (never call) derivative Functions
         self.construct(name, {"enable_fd": True})
 
@@ -109,7 +123,11 @@ class _Callback(ca.Callback):
 
     def eval(self, args):
         t0 = time.perf_counter()
-        out = self._fn(*[np.asarray(a.full() if hasattr(a, "full") else a, float).ravel() for a in args])
+        try:
+            out = self._fn(*[np.asarray(a.full() if hasattr(a, "full") else a, float).ravel() for a in args])
+        except BaseException as exc:
+            self._raised.record(exc)
+            raise
         self._timings[self.name()] = self._timings.get(self.name(), 0.0) + time.perf_counter() - t0
         self._calls[self.name()] = self._calls.get(self.name(), 0) + 1
         return [ca.DM(sp, np.atleast_1d(np.asarray(v, float)).ravel()) for v, (_, sp) in zip(out, self._outs)]
@@ -118,9 +136,9 @@ class _Callback(ca.Callback):
 class _Progress(ca.Callback):
     """Ipopt's iterations on a progress bar: objective and constraint violation."""
 
-    def __init__(self, n: int, m: int, lbg: np.ndarray, ubg: np.ndarray, desc: str, max_iter: int):
+    def __init__(self, n: int, m: int, lbg: np.ndarray, ubg: np.ndarray, desc: str, max_iter: int, raised: _Raised):
         ca.Callback.__init__(self)
-        self.n, self.m, self.lbg, self.ubg = n, m, lbg, ubg
+        self.n, self.m, self.lbg, self.ubg, self.raised = n, m, lbg, ubg, raised
         self.bar = bar(total=max_iter, desc=desc, unit="it")
         self.construct("ipopt_progress", {})
 
@@ -147,11 +165,14 @@ class _Progress(ca.Callback):
         return ca.Sparsity.dense(0)
 
     def eval(self, args):
-        g = np.asarray(args[ca.nlpsol_out().index("g")]).ravel()
-        viol = float(np.max(np.concatenate([[0.0], self.lbg - g, g - self.ubg]))) if g.size else 0.0
-        self.bar.update(1)
-        self.bar.set_postfix(f=f"{float(args[ca.nlpsol_out().index('f')]):.6g}", viol=f"{viol:.1e}")
-        return [0]
+        try:
+            g = np.asarray(args[ca.nlpsol_out().index("g")]).ravel()
+            viol = float(np.max(np.concatenate([[0.0], self.lbg - g, g - self.ubg]))) if g.size else 0.0
+            self.bar.update(1)
+            self.bar.set_postfix(f=f"{float(args[ca.nlpsol_out().index('f')]):.6g}", viol=f"{viol:.1e}")
+        except BaseException as exc:
+            self.raised.record(exc)
+        return [1 if self.raised.error is not None else 0]  # non-zero: Ipopt stops
 
 
 def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg: np.ndarray, ubg: np.ndarray,
@@ -166,29 +187,30 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
     n, m = nlp.n_w, nlp.m
     timings: dict[str, float] = {}
     calls: dict[str, int] = {}
+    raised = _Raised()
     dense = ca.Sparsity.dense
     xin = [("x", dense(n)), ("p", dense(0))]
     cbs = {
-        "f": _Callback("nlp_f", lambda w, p: [nlp.objective(w)], xin, [("f", dense(1))], timings, calls,
+        "f": _Callback("nlp_f", lambda w, p: [nlp.objective(w)], xin, [("f", dense(1))], timings, calls, raised,
                        jac_x=dense(1, n)),
-        "g": _Callback("nlp_g", lambda w, p: [nlp.constraints(w)], xin, [("g", dense(m))], timings, calls,
+        "g": _Callback("nlp_g", lambda w, p: [nlp.constraints(w)], xin, [("g", dense(m))], timings, calls, raised,
                        jac_x=nlp.jac_sparsity),
         "grad_f": _Callback("nlp_grad_f", lambda w, p: [nlp.objective(w), nlp.gradient(w)], xin,
-                            [("f", dense(1)), ("grad_f_x", dense(n))], timings, calls),
+                            [("f", dense(1)), ("grad_f_x", dense(n))], timings, calls, raised),
         "jac_g": _Callback("nlp_jac_g", lambda w, p: [nlp.constraints(w), nlp.jacobian(w)], xin,
-                           [("g", dense(m)), ("jac_g_x", nlp.jac_sparsity)], timings, calls),
+                           [("g", dense(m)), ("jac_g_x", nlp.jac_sparsity)], timings, calls, raised),
     }
     if hessian == "exact":
         cbs["hess_lag"] = _Callback("nlp_hess_l", lambda w, p, lf, lg: [nlp.hessian(w, float(lf[0]), lg)],
                                     xin + [("lam_f", dense(1)), ("lam_g", dense(m))],
-                                    [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings, calls)
+                                    [("triu_hess_gamma_x_x", nlp.hess_sparsity)], timings, calls, raised)
     ipopt = {**DEFAULT_OPTIONS, **(options or {})}
     if warm is not None:
         ipopt = {**ipopt, **WARM_START_OPTIONS, **(options or {})}
     if hessian == "lbfgs":
         ipopt["hessian_approximation"] = "limited-memory"
     max_iter = int(ipopt["max_iter"])
-    progress = _Progress(n, m, np.asarray(lbg, float), np.asarray(ubg, float), desc, max_iter)
+    progress = _Progress(n, m, np.asarray(lbg, float), np.asarray(ubg, float), desc, max_iter, raised)
     t0 = time.perf_counter()  # time_s: the solver's construction and its run
     w = ca.MX.sym("w", n)
     p = ca.MX.sym("p", 0)
@@ -201,8 +223,12 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
         args.update({"lam_g0": warm["lam_g0"], "lam_x0": warm["lam_x0"]})
     try:
         sol = solver(**args)
+    except KeyboardInterrupt as exc:  # between callbacks, in CasADi's own code
+        raised.record(exc)
     finally:
         progress.bar.close()
+    if raised.error is not None:  # Ctrl-C or a failing callback: never a result
+        raise raised.error
     elapsed = time.perf_counter() - t0
     stats = solver.stats()
     status = str(stats.get("return_status", "unknown"))
@@ -210,4 +236,16 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
     return IpoptResult(x=np.asarray(sol["x"]).ravel(), f=float(sol["f"]), g=np.asarray(sol["g"]).ravel(),
                        lam_g=np.asarray(sol["lam_g"]).ravel(), lam_x=np.asarray(sol["lam_x"]).ravel(),
                        status=status, success=success, iterations=int(stats.get("iter_count", -1)),
-                       time_s=elapsed, timings=timings, calls=calls)
+                       time_s=elapsed, timings=timings, calls=calls, history=_history(stats))
+
+
+HISTORY_KEYS = {"objective": "obj", "inf_pr": "inf_pr", "inf_du": "inf_du", "mu": "mu", "alpha_pr": "alpha_pr",
+                "alpha_du": "alpha_du"}
+
+
+def _history(stats: dict) -> dict[str, list[float]]:
+    """Ipopt's per-iteration log from CasADi's solver statistics (:attr:`IpoptResult.history`)."""
+    its = stats.get("iterations") or {}
+    out = {k: [float(v) for v in its.get(src, [])] for k, src in HISTORY_KEYS.items()}
+    out["iter"] = [float(i) for i in range(len(out["objective"]))]
+    return out
