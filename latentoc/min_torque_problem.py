@@ -43,6 +43,7 @@ from .nlp.ipopt import HESSIANS, IpoptResult
 from .motions import TRAINING, TRAINING_MOTIONS, Demonstration, check_frames
 from .problem import TUBE, Problem
 from .problem_inputs import check_problem_files, problem_demonstration, require_fixed_base
+from .results import convergence_entry
 from .robots import ROBOT, describe_robot
 from .schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
 from .solve import SOLVERS, Solution, resolve_tube
@@ -209,6 +210,18 @@ def _limit_violations(settings: MinTorqueSettings, robot: pin.Model, motion: dic
     return out
 
 
+def _limit_arrays(nlp: MinTorqueNLP) -> dict[str, np.ndarray]:
+    """The limits the NLP enforced, as trajectory arrays (q_min, q_max, v_max, tau_min, tau_max)."""
+    lim, out = nlp.limits, {}
+    if lim.q_lo is not None and lim.q_hi is not None:
+        out.update(q_min=lim.q_lo, q_max=lim.q_hi)
+    if lim.v_max is not None:
+        out["v_max"] = lim.v_max
+    if lim.tau_max is not None:
+        out.update(tau_min=-lim.tau_max, tau_max=lim.tau_max)
+    return out
+
+
 def _own_motion(problem: Problem, demo: Demonstration, settings: MinTorqueSettings, q: np.ndarray) -> dict:
     """The result's facts about the robot, the demonstration (and how far the motion's end poses q[0],
     q[-1] are from its first and last frames), the objective and the goal."""
@@ -248,15 +261,18 @@ EXCHANGE_ROUNDS = 8
 
 
 def _solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild, x0: np.ndarray, sym: SymbolicModel,
-                     t: np.ndarray, verbose: bool) -> tuple[MinTorqueNLP, IpoptResult, list[dict]]:
+                     t: np.ndarray, verbose: bool) -> tuple[MinTorqueNLP, IpoptResult, list[dict], list[dict]]:
     """Solve, check the tube and the limits on the 1 kHz grid t, add the violated times to the NLP
-    (``rebuild(extra)``) and resume from the point, until the grid holds (the exchange)."""
-    rounds = []
+    (``rebuild(extra)``) and resume from the point, until the grid holds (the exchange). Returns
+    the last NLP and run, the rounds' summaries and each round's Ipopt history (``convergence``)."""
+    rounds: list[dict] = []
+    convergence: list[dict] = []
     while True:
         res = _run_ipopt(problem, nlp, x0, verbose)
         entry = {"iterations": res.iterations, "time_s": res.time_s, "status": res.status,
                  "grid_points": int(len(nlp.grid_t)), "torque_points": int(len(nlp.quad_t) + len(nlp.extra.torque))}
         rounds.append(entry)
+        convergence.append(convergence_entry(nlp.method, len(rounds), res.history))
         if not res.success or len(rounds) >= EXCHANGE_ROUNDS:
             break
         P = nlp.control_points(res.x)
@@ -269,7 +285,7 @@ def _solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild, x0: np.ndarra
         if not add:
             break
         nlp, x0 = rebuild(nlp.extra.merged(add)), res.x
-    return nlp, res, rounds
+    return nlp, res, rounds, convergence
 
 
 def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
@@ -324,7 +340,7 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
     cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t1
     x_start = nlp.w0 if initial_guess is None else nlp.path.decision_vector(initial_guess)
-    nlp, res, rounds = _solve_exchanged(problem, nlp, lambda extra: latent_nlp(gp, sym, settings, delta, path,
+    nlp, res, rounds, convergence = _solve_exchanged(problem, nlp, lambda extra: latent_nlp(gp, sym, settings, delta, path,
                                                                                extra=extra), x_start, sym, t, verbose)
 
     P = nlp.control_points(res.x)
@@ -342,13 +358,14 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
                                   **_limit_violations(settings, robot, motion)},
                    "build_time_s": build_time, "gpdm_time_s": gpdm_time, "warm_start": initial_guess is not None,
                    **gp.learning_summary(),
-                   "exchange_rounds": rounds, **_own_motion(problem, demo, settings, motion["q"])})
+                   "exchange_rounds": rounds, "convergence": convergence,
+                   **_own_motion(problem, demo, settings, motion["q"])})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     result["iterations"] = sum(r["iterations"] for r in rounds)
     result["solve_time_s"] = sum(r["time_s"] for r in rounds)
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
                   "x": x, "x_initial": x0, "P": P, "P_initial": P0, "q_initial": init["q"], "sigma2": sigma2,
-                  "model": np.str_(robot.saveToString())}
+                  "model": np.str_(robot.saveToString()), **_limit_arrays(nlp)}
     return Solution(result=result, trajectory=trajectory, warm={"P": P, "tube": delta} if res.success else None,
                     gpdm=gp)
 
@@ -364,7 +381,7 @@ def _solve_joint_range(problem: Problem, demo: Demonstration, sym: SymbolicModel
     nlp = joint_range_nlp(sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k))
     cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t0
-    nlp, res, rounds = _solve_exchanged(problem, nlp, lambda extra: joint_range_nlp(
+    nlp, res, rounds, convergence = _solve_exchanged(problem, nlp, lambda extra: joint_range_nlp(
         sym, settings, np.asarray(t_train), np.asarray(Q_train), float(k), extra=extra), nlp.w0, sym, t, verbose)
     P, P0, spline = nlp.control_points(res.x), nlp.path.P_init, nlp.path.spline
     motion = sampled_motion(nlp.layer, robot, spline, P, t, settings.objective)
@@ -373,12 +390,14 @@ def _solve_joint_range(problem: Problem, demo: Demonstration, sym: SymbolicModel
     result.update({"joint_range_deg": float(k), "n_training_frames": int(len(t_train)),
                    "build_time_s": build_time, "gpdm_time_s": 0.0, "warm_start": False,
                    "violations": _limit_violations(settings, robot, motion), "exchange_rounds": rounds,
+                   "convergence": convergence,
                    **_own_motion(problem, demo, settings, motion["q"])})
     _finish(result, nlp, res, cost_initial, motion, init["L"], t)
     result["iterations"] = sum(r["iterations"] for r in rounds)
     result["solve_time_s"] = sum(r["time_s"] for r in rounds)
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"],
-                  "P": P, "P_initial": P0, "q_initial": init["q"], "model": np.str_(robot.saveToString())}
+                  "P": P, "P_initial": P0, "q_initial": init["q"], "model": np.str_(robot.saveToString()),
+                  **_limit_arrays(nlp)}
     return Solution(result=result, trajectory=trajectory)
 
 

@@ -2,8 +2,9 @@
 
 ``result.json`` holds :data:`SCHEMA_VERSION` and the same core fields for every kind (problem,
 kind, method, status, success, iterations, cost_initial, cost, gain_pct, cost_meaning, times,
-tube, violations, environment, the problem's resolved settings), then ``details``, the kind's
-own fields. ``trajectory.npz`` holds the arrays of :data:`TRAJECTORY_KEYS`, the one list of its
+tube, violations, environment, the problem's resolved settings), ``convergence`` (Ipopt's
+per-iteration log of every phase and exchange round, :func:`convergence_entry`), then
+``details``, the kind's own fields. ``trajectory.npz`` holds the arrays of :data:`TRAJECTORY_KEYS`, the one list of its
 keys; ``gpdm.npz`` the GPDM the motion was optimised in (:meth:`latentoc.gpdm.GPDM.save`), so a
 folder is self-contained: the plots read nothing else. Each file is written atomically (a
 temporary file, then ``os.replace``) and ``result.json`` last, so a folder with a
@@ -30,7 +31,8 @@ from .problem import Problem
 from .solve import Solution
 
 __all__ = ["Result", "Times", "TubeResult", "Environment", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
-           "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json"]
+           "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",
+           "HISTORY_KEYS"]
 
 SCHEMA_VERSION = 1
 RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME = "result.json", "trajectory.npz", "gpdm.npz"
@@ -68,11 +70,27 @@ TRAJECTORY_KEYS: dict[str, str] = {
     "takeoff": "takeoff time, s",
     "touchdown": "touchdown time, s",
     "settle": "end of the landing's settling, s",
-    "tau_min": "lower torque limits, N m (nv - 6)",
-    "tau_max": "upper torque limits, N m (nv - 6)",
+    "tau_min": "lower torque limits, N m (as tau's columns; where enforced)",
+    "tau_max": "upper torque limits, N m (as tau's columns; where enforced)",
+    # the enforced limits of a fixed-base kind (latent-min-torque): what the plots draw
+    "q_min": "lower joint limits, rad (nq; -inf: none)",
+    "q_max": "upper joint limits, rad (nq; inf: none)",
+    "v_max": "velocity limits |v| <= v_max, rad/s (nv; inf: none)",
     "friction": "friction coefficient mu",
 }
 _REQUIRED_ARRAYS = ("t", "q", "v", "a", "tau", "model")
+
+#: the per-iteration series of a convergence entry's history (Ipopt's log)
+HISTORY_KEYS = ("iter", "objective", "inf_pr", "inf_du", "mu", "alpha_pr", "alpha_du")
+
+
+def convergence_entry(phase: str, round: int, history: Mapping[str, Any]) -> dict[str, Any]:
+    """One element of ``result.json``'s ``convergence``: Ipopt's per-iteration ``history``
+    (:attr:`latentoc.nlp.ipopt.IpoptResult.history`) of one run, named by its ``phase`` and
+    exchange ``round`` (1-based). A kind's result dict carries the list under the key
+    ``"convergence"``."""
+    return {"phase": str(phase), "round": int(round),
+            "history": {k: [float(v) for v in history.get(k, [])] for k in HISTORY_KEYS}}
 
 
 @dataclass(frozen=True)
@@ -138,7 +156,8 @@ def _cpu_name() -> str:
 # the kind contract's result keys that become core fields (the rest are the kind's details)
 _CORE_KEYS = ("problem", "kind", "method", "status", "success", "iterations", "cost_initial", "cost",
               "performance_gain_pct", "cost_meaning", "gpdm_time_s", "build_time_s", "compile_time_s",
-              "solve_time_s", "tube_spec", "tube", "tube_relative", "tube_training", "max_sigma2", "violations")
+              "solve_time_s", "tube_spec", "tube", "tube_relative", "tube_training", "max_sigma2", "violations",
+              "convergence")
 
 
 @dataclass
@@ -161,6 +180,7 @@ class Result:
     environment: Environment
     settings: dict[str, Any]
     details: dict[str, Any] = field(default_factory=dict)
+    convergence: list[dict[str, Any]] = field(default_factory=list)  # convergence_entry per Ipopt run
     trajectory: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     gpdm: GPDM | None = field(default=None, repr=False)
     warm: dict[str, Any] | None = field(default=None, repr=False)  # for a neighbouring tube; not saved
@@ -186,6 +206,7 @@ class Result:
                    tube=tube, violations={k: float(v) for k, v in r["violations"].items()},
                    environment=Environment.current(), settings=dict(problem.settings),
                    details={"source": problem.source, **{k: v for k, v in r.items() if k not in _CORE_KEYS}},
+                   convergence=[convergence_entry(c["phase"], c["round"], c["history"]) for c in r.get("convergence", [])],
                    trajectory=dict(solution.trajectory), gpdm=solution.gpdm, warm=solution.warm)
 
     # ------------------------------------------------------------------ JSON and files
@@ -197,7 +218,7 @@ class Result:
             data[name] = getattr(self, name)
         data.update(times=asdict(self.times), tube=None if self.tube is None else asdict(self.tube),
                     violations=self.violations, environment=asdict(self.environment), settings=self.settings,
-                    details=self.details)
+                    convergence=self.convergence, details=self.details)
         return _plain(data)
 
     def files(self) -> dict[str, bytes]:
@@ -241,7 +262,9 @@ class Result:
                        cost=data["cost"], gain_pct=data["gain_pct"], cost_meaning=data["cost_meaning"],
                        times=Times(**data["times"]), tube=None if tube is None else TubeResult(**tube),
                        violations=data["violations"], environment=Environment(**data["environment"]),
-                       settings=data["settings"], details=data["details"], trajectory=trajectory, gpdm=gpdm)
+                       settings=data["settings"], details=data["details"],
+                       convergence=data.get("convergence", []),  # results saved before it: none
+                       trajectory=trajectory, gpdm=gpdm)
         except (KeyError, TypeError) as exc:
             raise ResultFileError(f"{where}: {RESULT_NAME} misses or mistypes a field: {exc}") from None
 

@@ -28,6 +28,31 @@ def test_round_trip(tmp_path):
     assert sorted(os.listdir(tmp_path / "out")) == [RESULT_NAME, TRAJECTORY_NAME]
 
 
+def test_convergence_round_trip(tmp_path):
+    """A kind's ``convergence`` list becomes the result's, every history series as floats; a result.json
+    written before the field existed reads as none."""
+    from latentoc.results import convergence_entry
+
+    hist = {"iter": [0, 1], "objective": [3, 2.5], "inf_pr": [1e-2, 1e-9], "inf_du": [1, 1e-9], "mu": [0.1, 1e-9],
+            "alpha_pr": [0, 1], "alpha_du": [0, 1]}
+    sol = Solution(result={**make_result().to_json(), "performance_gain_pct": 1.0, "solve_time_s": 1.0,
+                           "tube": None, "convergence": [{"phase": "phase 1", "round": 1, "history": hist}]},
+                   trajectory=make_result().trajectory)
+    r = Result.from_solution(sol, _Problem())
+    assert r.convergence == [convergence_entry("phase 1", 1, hist)] and "convergence" not in r.details
+    assert r.convergence[0]["history"]["iter"] == [0.0, 1.0]
+    r.save(tmp_path)
+    assert load_result(tmp_path).convergence == r.convergence
+    data = json.loads((tmp_path / RESULT_NAME).read_text())
+    del data["convergence"]
+    (tmp_path / RESULT_NAME).write_text(json.dumps(data))
+    assert load_result(tmp_path).convergence == []
+
+
+class _Problem:
+    source, settings = "test", {}
+
+
 def test_result_json_has_the_core_fields_of_every_kind(tmp_path):
     make_result().save(tmp_path)
     data = json.loads((tmp_path / RESULT_NAME).read_text())

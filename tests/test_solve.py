@@ -36,6 +36,33 @@ def test_converges_and_beats_initial(solution):
     assert r.violations["joint_limits_rad"] == 0.0
 
 
+def test_convergence_history_of_every_round(solution, tmp_path):
+    """result.json's convergence: Ipopt's log of each exchange round, one row per iteration (0 included),
+    starting where the previous round ended and ending at the result's cost; read back from the folder."""
+    r = solution
+    rounds = r.details["exchange_rounds"]
+    assert [(c["phase"], c["round"]) for c in r.convergence] == [("latent", k + 1) for k in range(len(rounds))]
+    for c, rd in zip(r.convergence, rounds):
+        h = c["history"]
+        assert h["iter"] == [float(i) for i in range(rd["iterations"] + 1)]
+        assert all(len(h[k]) == len(h["iter"]) for k in ("objective", "inf_pr", "inf_du", "mu", "alpha_pr", "alpha_du"))
+    assert np.isclose(r.convergence[0]["history"]["objective"][0], r.cost_initial)
+    assert np.isclose(r.convergence[-1]["history"]["objective"][-1], r.cost)
+    assert r.convergence[-1]["history"]["inf_pr"][-1] < 1e-8
+    r.save(tmp_path)
+    assert latentoc.load_result(tmp_path).convergence == r.convergence
+
+
+def test_enforced_limits_are_in_the_trajectory(solution):
+    """The arm's joint limits (on in the problem) travel with the motion as the model's limits;
+    velocity and torque limits are off there, so they are absent."""
+    tr = solution.trajectory
+    model = pin.Model()
+    model.loadFromString(str(tr["model"]))
+    assert np.array_equal(tr["q_min"], model.lowerPositionLimit) and np.array_equal(tr["q_max"], model.upperPositionLimit)
+    assert not {"v_max", "tau_min", "tau_max"} & set(tr)
+
+
 def test_tube_holds_on_1khz_grid(problem, solution):
     gp, _ = problem_gpdm(problem)
     tr = solution.trajectory
