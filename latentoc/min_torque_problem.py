@@ -212,7 +212,7 @@ def _limit_violations(settings: MinTorqueSettings, robot: pin.Model, motion: dic
 
 def _limit_arrays(nlp: MinTorqueNLP) -> dict[str, np.ndarray]:
     """The limits the NLP enforced, as trajectory arrays (q_min, q_max, v_max, tau_min, tau_max)."""
-    lim, out = nlp.limits, {}
+    lim, out = nlp.limits, dict[str, np.ndarray]()
     if lim.q_lo is not None and lim.q_hi is not None:
         out.update(q_min=lim.q_lo, q_max=lim.q_hi)
     if lim.v_max is not None:
