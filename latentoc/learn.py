@@ -144,7 +144,7 @@ def learn_file(path: str | Path, robot: str, out: str | Path, *, latent_dim: int
         files.update(figures(learned, Path(path).stem))
     summary = {"robot": robot, **learned.summary()}
     files[LEARN_NAME] = (json.dumps(summary, indent=2) + "\n").encode()
-    return learned, write_files(files, out)
+    return learned, write_files(files, out, marker=LEARN_NAME)
 
 
 def load_learned_gpdm(path: str | Path) -> GPDM:

@@ -6,9 +6,12 @@ tube, violations, environment, the problem's resolved settings), ``convergence``
 per-iteration log of every phase and exchange round, :func:`convergence_entry`), then
 ``details``, the kind's own fields. ``trajectory.npz`` holds the arrays of :data:`TRAJECTORY_KEYS`, the one list of its
 keys; ``gpdm.npz`` the GPDM the motion was optimised in (:meth:`latentoc.gpdm.GPDM.save`), so a
-folder is self-contained: the plots read nothing else. Each file is written atomically (a
-temporary file, then ``os.replace``) and ``result.json`` last, so a folder with a
-``result.json`` is complete.
+folder is self-contained: the plots read nothing else. The folder is written into a temporary
+folder beside it and renamed into place (:func:`latentoc.files.write_folder`; into an existing
+folder, the old ``result.json`` goes first and the new one comes last), and ``result.json``
+records the SHA-256 of the other files (``checksums``), which :func:`load_result` verifies, so a
+folder with a ``result.json`` is one complete write. JSON is strict: a non-finite number is the
+string ``"NaN"``, ``"Infinity"`` or ``"-Infinity"``; every core field's type is checked on load.
 """
 
 from __future__ import annotations
@@ -19,13 +22,14 @@ import os
 import platform
 import tempfile
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .errors import ResultFileError
+from .files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
 from .gpdm import GPDM
 from .problem import Problem
 from .solve import Solution
@@ -211,7 +215,7 @@ class Result:
 
     # ------------------------------------------------------------------ JSON and files
     def to_json(self) -> dict[str, Any]:
-        """``result.json``'s content (JSON-ready)."""
+        """``result.json``'s content (JSON-ready) but the checksums of the files."""
         data: dict[str, Any] = {"schema_version": self.schema_version}
         for name in ("problem", "kind", "method", "status", "success", "iterations", "cost_initial", "cost",
                      "gain_pct", "cost_meaning"):
@@ -226,7 +230,8 @@ class Result:
         files = {TRAJECTORY_NAME: _npz_bytes({k: np.asarray(v) for k, v in self.trajectory.items()})}
         if self.gpdm is not None:
             files[GPDM_NAME] = _gpdm_bytes(self.gpdm)
-        files[RESULT_NAME] = (json.dumps(self.to_json(), indent=2) + "\n").encode()
+        checksums = {name: sha256(data) for name, data in files.items()}
+        files[RESULT_NAME] = dumps_json({**self.to_json(), "checksums": checksums}).encode()
         return files  # result.json last: written last, it marks the folder complete
 
     def save(self, out_dir: str | Path) -> list[Path]:
@@ -235,38 +240,119 @@ class Result:
 
     @classmethod
     def from_files(cls, files: Mapping[str, bytes], where: str = "result") -> Result:
-        """Inverse of :meth:`files` (a :class:`ResultFileError` naming what is wrong)."""
+        """Inverse of :meth:`files` (a :class:`ResultFileError` naming what is wrong): the
+        checksums verified, every core field's type checked."""
         if RESULT_NAME not in files or TRAJECTORY_NAME not in files:
             raise ResultFileError(f"{where}: needs {RESULT_NAME} and {TRAJECTORY_NAME}")
         try:
-            data = json.loads(files[RESULT_NAME])
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            data = json.loads(files[RESULT_NAME], parse_constant=_no_constant)
+        except (json.JSONDecodeError, UnicodeDecodeError, ValueError) as exc:
             raise ResultFileError(f"{where}: {RESULT_NAME} is not JSON: {exc}") from None
         version = data.get("schema_version") if isinstance(data, dict) else None
         if version != SCHEMA_VERSION:
             raise ResultFileError(f"{where}: {RESULT_NAME} has schema_version {version!r}; this latentoc "
                                   f"reads {SCHEMA_VERSION} (a result written by another version)")
+        names = _verified(files, data.get("checksums"), where)
         try:
             with np.load(io.BytesIO(files[TRAJECTORY_NAME]), allow_pickle=False) as f:
                 trajectory = {k: f[k] for k in f.files}
-            gpdm = _gpdm_from_bytes(files[GPDM_NAME]) if GPDM_NAME in files else None
-        except (OSError, ValueError, KeyError) as exc:
+            gpdm = _gpdm_from_bytes(files[GPDM_NAME]) if GPDM_NAME in names else None
+        except NPZ_ERRORS as exc:
             raise ResultFileError(f"{where}: unreadable arrays: {exc}") from None
         missing = [k for k in _REQUIRED_ARRAYS if k not in trajectory]
         if missing:
             raise ResultFileError(f"{where}: {TRAJECTORY_NAME} lacks {missing}")
+        core = _typed(data, where)
+        return cls(**core, trajectory=trajectory, gpdm=gpdm)
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not strict JSON")
+
+
+def _verified(files: Mapping[str, bytes], checksums: Any, where: str) -> list[str]:
+    """The names of the array files that belong to result.json: each one its ``checksums`` list,
+    with the content recorded there (results written before checksums: the files present)."""
+    if checksums is None:
+        return [n for n in (TRAJECTORY_NAME, GPDM_NAME) if n in files]
+    if not isinstance(checksums, dict) or TRAJECTORY_NAME not in checksums:
+        raise ResultFileError(f"{where}: {RESULT_NAME}: key 'checksums' must map each array file to its SHA-256")
+    for name, digest in checksums.items():
+        if name not in files:
+            raise ResultFileError(f"{where}: {name} is missing ({RESULT_NAME} lists it)")
+        if sha256(files[name]) != digest:
+            raise ResultFileError(f"{where}: {name} is not the file {RESULT_NAME} was written with (its SHA-256 "
+                                  "differs: damaged, or left by another solve); solve again")
+    return list(checksums)
+
+
+def _text(v: Any) -> str:
+    if not isinstance(v, str):
+        raise ValueError
+    return v
+
+
+def _integer(v: Any) -> int:
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise ValueError
+    return v
+
+
+def _flag(v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise ValueError
+    return v
+
+
+def _dict(v: Any) -> dict:
+    if not isinstance(v, dict):
+        raise ValueError
+    return v
+
+
+def _spec(v: Any) -> float | str:
+    return v if isinstance(v, str) else json_number(v)
+
+
+_KINDS = {_text: "a string", _integer: "an integer", _flag: "true or false", _dict: "an object",
+          json_number: "a number", _spec: "a number or a string"}
+_CORE_TYPES: dict[str, Callable[[Any], Any]] = {
+    "problem": _text, "kind": _text, "method": _text, "status": _text, "success": _flag, "iterations": _integer,
+    "cost_initial": json_number, "cost": json_number, "gain_pct": json_number, "cost_meaning": _text,
+    "times": _dict, "violations": _dict, "environment": _dict, "settings": _dict, "details": _dict}
+_TUBE_TYPES = {"spec": _spec, "delta": json_number, "relative": json_number, "training": json_number,
+               "max_sigma2": json_number}
+
+
+def _typed(data: dict[str, Any], where: str) -> dict[str, Any]:
+    """Result's fields from result.json, each checked: a ResultFileError naming the key."""
+    def get(table: Mapping[str, Any], key: str, check: Callable[[Any], Any], name: str) -> Any:
+        if key not in table:
+            raise ResultFileError(f"{where}/{RESULT_NAME}: misses the field {name!r}")
         try:
-            tube = data["tube"]
-            return cls(problem=data["problem"], kind=data["kind"], method=data["method"], status=data["status"],
-                       success=data["success"], iterations=data["iterations"], cost_initial=data["cost_initial"],
-                       cost=data["cost"], gain_pct=data["gain_pct"], cost_meaning=data["cost_meaning"],
-                       times=Times(**data["times"]), tube=None if tube is None else TubeResult(**tube),
-                       violations=data["violations"], environment=Environment(**data["environment"]),
-                       settings=data["settings"], details=data["details"],
-                       convergence=data.get("convergence", []),  # results saved before it: none
-                       trajectory=trajectory, gpdm=gpdm)
-        except (KeyError, TypeError) as exc:
-            raise ResultFileError(f"{where}: {RESULT_NAME} misses or mistypes a field: {exc}") from None
+            return check(table[key])
+        except (TypeError, ValueError):
+            raise ResultFileError(f"{where}/{RESULT_NAME}: key {name!r} must be {_KINDS[check]}, "
+                                  f"got {table[key]!r}") from None
+
+    out = {k: get(data, k, check, k) for k, check in _CORE_TYPES.items()}
+    out["times"] = Times(**{f.name: get(out["times"], f.name, json_number, f"times.{f.name}")
+                            for f in fields(Times) if f.name in out["times"]})
+    out["violations"] = {k: get(out["violations"], k, json_number, f"violations.{k}") for k in out["violations"]}
+    env = out["environment"]
+    out["environment"] = Environment(**{f.name: get(env, f.name, _integer if f.type == "int" else _text,
+                                                    f"environment.{f.name}")
+                                        for f in fields(Environment) if f.name in env or f.name != "scipy"})
+    convergence = data.get("convergence", [])  # results saved before it: none
+    if not isinstance(convergence, list) or not all(isinstance(c, dict) for c in convergence):
+        raise ResultFileError(f"{where}/{RESULT_NAME}: key 'convergence' must be a list of objects")
+    out["convergence"] = convergence
+    tube = data.get("tube")
+    if tube is not None:
+        tube = get(data, "tube", _dict, "tube")
+        tube = TubeResult(**{k: get(tube, k, c, f"tube.{k}") for k, c in _TUBE_TYPES.items()})
+    out["tube"] = tube
+    return out
 
 
 def load_result(out_dir: str | Path) -> Result:
@@ -275,20 +361,14 @@ def load_result(out_dir: str | Path) -> Result:
     if not (out / RESULT_NAME).is_file():
         raise ResultFileError(f"{out}: no {RESULT_NAME} (not a result folder, or a solve that did not finish)")
     names = [n for n in (RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME) if (out / n).is_file()]
-    return Result.from_files({n: (out / n).read_bytes() for n in names}, str(out))
+    try:
+        files = {n: (out / n).read_bytes() for n in names}
+    except OSError as exc:
+        raise ResultFileError(f"{out}: cannot be read: {exc}") from None
+    return Result.from_files(files, str(out))
 
 
-def _plain(value: Any) -> Any:
-    """JSON-ready: numpy scalars and arrays as Python numbers and lists."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
+_plain = plain  # JSON-ready values (latentoc.files.plain)
 
 
 def _npz_bytes(arrays: dict[str, Any]) -> bytes:
@@ -309,42 +389,13 @@ def _gpdm_from_bytes(data: bytes) -> GPDM:
         return GPDM.load(Path(tmp) / GPDM_NAME)
 
 
-_UMASK = os.umask(0)
-os.umask(_UMASK)
-
-
-def atomic_write(path: Path, write: Callable[[Any], None], binary: bool = False) -> None:
-    """Call ``write(file)`` on a temporary file next to ``path``, then move it into place."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb" if binary else "w") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp's files are private; results are not
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def write_files(files: Mapping[str, bytes], out_dir: str | Path) -> list[Path]:
-    """Write ``files`` (name -> content) atomically into ``out_dir``, ``result.json`` last; returns
-    the paths, result.json first."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    names = sorted(files, key=lambda n: (n == RESULT_NAME, n != TRAJECTORY_NAME))
-    for name in names:
-        _write_bytes(out / name, files[name])
-    return [out / n for n in sorted(files, key=lambda n: (n != RESULT_NAME, n != TRAJECTORY_NAME))]
-
-
-def _write_bytes(path: Path, data: bytes) -> None:
-    atomic_write(path, lambda f: f.write(data), binary=True)
+def write_files(files: Mapping[str, bytes], out_dir: str | Path, marker: str = RESULT_NAME) -> list[Path]:
+    """Write ``files`` (name -> content) as the folder ``out_dir``, all at once
+    (:func:`latentoc.files.write_folder`, ``marker`` last); returns the paths, the marker first."""
+    paths = write_folder(files, out_dir, marker, owned=(RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME))
+    return sorted(paths, key=lambda p: (p.name != marker, p.name != TRAJECTORY_NAME))
 
 
 def write_json(path: Path, data: Any) -> None:
-    """Atomically write ``data`` as indented JSON."""
-    atomic_write(Path(path), lambda f: json.dump(_plain(data), f, indent=2, allow_nan=True))
+    """Atomically write ``data`` as indented, strict JSON."""
+    atomic_write(Path(path), lambda f: f.write(dumps_json(data)))

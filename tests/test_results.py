@@ -10,6 +10,7 @@ from result_factory import make_result
 
 from latentoc.errors import LatentocError, ResultFileError
 from latentoc.results import (GPDM_NAME, RESULT_NAME, SCHEMA_VERSION, TRAJECTORY_KEYS, TRAJECTORY_NAME, Result,
+                              TubeResult,
                               atomic_write, load_result)
 from latentoc.solve import Solution
 
@@ -83,8 +84,10 @@ def test_gpdm_travels_with_the_result(tmp_path):
     (lambda d: (d / RESULT_NAME).write_text("{"), "not JSON"),
     (lambda d: (d / RESULT_NAME).write_text(json.dumps({"problem": "old", "cost": 1.0})),
      "schema_version None; this latentoc reads 1"),
-    (lambda d: (d / RESULT_NAME).write_text(json.dumps({"schema_version": SCHEMA_VERSION})), "misses or mistypes"),
-    (lambda d: (d / TRAJECTORY_NAME).write_bytes(b"garbage"), "unreadable arrays"),
+    (lambda d: (d / RESULT_NAME).write_text(json.dumps({"schema_version": SCHEMA_VERSION})),
+     "result.json: misses the field 'problem'"),
+    (lambda d: (d / TRAJECTORY_NAME).write_bytes(b"garbage"), "trajectory.npz is not the file result.json was"),
+    (lambda d: (d / TRAJECTORY_NAME).write_bytes(b""), "trajectory.npz is not the file result.json was"),
 ])
 def test_damaged_folders_are_named_errors(tmp_path, damage, match):
     make_result().save(tmp_path)
@@ -114,3 +117,120 @@ def test_failed_write_leaves_no_file(tmp_path):
     assert os.listdir(tmp_path) == []
     atomic_write(target, lambda f: json.dump({"ok": 1}, f))
     assert json.loads(target.read_text()) == {"ok": 1} and os.listdir(tmp_path) == ["a.json"]
+
+
+# ---------------------------------------------------------------- issue 29: results you can trust
+def _edit_json(folder, **changes):
+    data = json.loads((folder / RESULT_NAME).read_text())
+    data.update(changes)
+    (folder / RESULT_NAME).write_text(json.dumps(data))
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("cost", "lots", "key 'cost' must be a number, got 'lots'"),
+    ("success", "yes", "key 'success' must be true or false"),
+    ("iterations", 7.5, "key 'iterations' must be an integer"),
+    ("times", {"solve_s": [1]}, "key 'times.solve_s' must be a number"),
+    ("violations", {"tube": None}, "key 'violations.tube' must be a number"),
+    ("tube", {"spec": "5x", "delta": "big", "relative": 1, "training": 1, "max_sigma2": 1},
+     "key 'tube.delta' must be a number"),
+    ("environment", {"latentoc": 1}, "key 'environment.latentoc' must be a string"),
+    ("convergence", {"a": 1}, "key 'convergence' must be a list"),
+])
+def test_field_types_are_checked_on_load(tmp_path, key, value, match):
+    """A result.json whose field has the wrong type is an error naming the file and the key, not a
+    Result holding a string where a cost should be."""
+    make_result().save(tmp_path)
+    _edit_json(tmp_path, **{key: value})
+    with pytest.raises(ResultFileError, match=match) as err:
+        load_result(tmp_path)
+    assert str(tmp_path / RESULT_NAME) in str(err.value)
+
+
+def test_json_is_strict_and_non_finite_numbers_round_trip(tmp_path):
+    """A tube of 1e308 gives an infinite delta x beta_3: result.json stays strict JSON (no Infinity
+    or NaN token, which other JSON readers refuse) and the numbers read back as they were."""
+    r = make_result(note=float("nan"))
+    r.tube = TubeResult(spec=1e308, delta=1e308, relative=float("inf"), training=0.1, max_sigma2=0.5)
+    r.gain_pct = float("-inf")
+    r.save(tmp_path)
+    text = (tmp_path / RESULT_NAME).read_text()
+    json.loads(text, parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
+    back = load_result(tmp_path)
+    assert back.tube.relative == float("inf") and back.tube.delta == 1e308 and back.gain_pct == float("-inf")
+    assert back.details["note"] == "NaN"
+    (tmp_path / RESULT_NAME).write_text(text.replace('"-Infinity"', "-Infinity"))
+    with pytest.raises(ResultFileError, match="not JSON: -Infinity is not strict JSON"):
+        load_result(tmp_path)
+
+
+def test_arrays_of_another_solve_are_refused(tmp_path):
+    """result.json records the checksums of the arrays: a trajectory.npz of another solve beside it
+    (a write that failed midway, a copy) is refused, not read as this result's."""
+    make_result(gain=10.0).save(tmp_path / "a")
+    make_result(gain=20.0, n=5).save(tmp_path / "b")
+    (tmp_path / "b" / TRAJECTORY_NAME).replace(tmp_path / "a" / TRAJECTORY_NAME)
+    with pytest.raises(ResultFileError, match="trajectory.npz is not the file result.json was written with"):
+        load_result(tmp_path / "a")
+
+
+def test_a_write_that_fails_midway_leaves_no_mixed_folder(tmp_path, monkeypatch):
+    """Saving over an earlier result: a failure while the new files move in leaves a folder with no
+    result.json (incomplete, resumed by a sweep), never the old result.json over new arrays; saving
+    into a new folder that fails leaves no folder and no temporary one."""
+    import latentoc.files as files
+
+    make_result(gain=10.0).save(tmp_path / "r")
+    real = os.replace
+
+    def fail_on_result(src, dst):
+        if str(dst).endswith(RESULT_NAME) and not str(src).endswith(".tmp"):
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(files.os, "replace", fail_on_result)
+    with pytest.raises(LatentocError, match="cannot write .*No space left"):
+        make_result(gain=20.0, n=5).save(tmp_path / "r")
+    assert not (tmp_path / "r" / RESULT_NAME).exists()
+    with pytest.raises(ResultFileError, match="no result.json"):
+        load_result(tmp_path / "r")
+    monkeypatch.setattr(files, "atomic_write", lambda *a, **k: (_ for _ in ()).throw(OSError(5, "I/O error")))
+    with pytest.raises(LatentocError, match="cannot write .*I/O error"):
+        make_result().save(tmp_path / "new")
+    assert sorted(os.listdir(tmp_path)) == ["r"]
+    monkeypatch.undo()
+    make_result(gain=20.0, n=5).save(tmp_path / "r")
+    assert load_result(tmp_path / "r").gain_pct == 20.0
+
+
+def test_saving_over_a_result_keeps_other_files_and_drops_stale_ones(tmp_path):
+    """Saving into an existing result folder replaces the result's files (an old gpdm.npz the new
+    result lacks goes) and leaves the user's other files, e.g. plots, alone."""
+    from latentoc.gpdm import GPDMSettings, learn_gpdm
+
+    Y = np.cumsum(np.random.default_rng(0).standard_normal((12, 3)), axis=0)
+    make_result(gpdm=learn_gpdm(Y, GPDMSettings(latent_dim=2, max_iterations=3))).save(tmp_path)
+    (tmp_path / "plots").mkdir()
+    make_result(gain=30.0).save(tmp_path)
+    assert sorted(os.listdir(tmp_path)) == ["plots", RESULT_NAME, TRAJECTORY_NAME]
+    assert load_result(tmp_path).gain_pct == 30.0
+
+
+def test_out_must_be_a_writable_folder(tmp_path):
+    from latentoc.files import OutputError, check_out_dir
+
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(OutputError, match="is a file, not a folder"):
+        make_result().save(tmp_path / "file")
+    with pytest.raises(OutputError, match="file is a file, not a folder"):
+        check_out_dir(tmp_path / "file" / "sub")
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        if not os.access(ro, os.W_OK):  # root may write anywhere
+            with pytest.raises(OutputError, match="is not writable"):
+                check_out_dir(ro / "new")
+    finally:
+        ro.chmod(0o700)
+    assert check_out_dir(tmp_path / "a" / "b") == tmp_path / "a" / "b"
