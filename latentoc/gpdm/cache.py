@@ -5,18 +5,25 @@ Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.nlp.jit.cache
 hash of the learner's version, the training sequences and the settings. The package ships the
 models of its slow-to-learn problems (the broad jump's, about 2 min) under the same names in
 ``latentoc/models/``; tests/test_gpdm_cache.py checks each is a converged minimum of its data.
+
+A cached model is written under a temporary name and renamed, with its SHA-256 in
+``gpdm_<key>.npz.sha256`` beside it; before it is loaded the checksum is verified and the model
+must be the one its name stands for (its data and settings hash to the name). A damaged,
+truncated, empty or foreign file is learned again and replaced, with a one-line warning.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import sys
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from ..files import NPZ_ERRORS, atomic_write, sha256
 from ..nlp.jit import cache_dir
 from .learning import GPDMSettings, learn_gpdm
 from .model import GPDM
@@ -40,21 +47,77 @@ def model_path(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) -> 
     return cache_dir() / "gpdm" / f"gpdm_{h.hexdigest()[:24]}.npz"
 
 
+def _sequences(model: GPDM) -> np.ndarray | list[np.ndarray]:
+    starts = np.cumsum([0] + list(model.sequence_lengths))
+    seqs = [model.Y[a:b] for a, b in zip(starts[:-1], starts[1:])]
+    return seqs[0] if len(seqs) == 1 else seqs
+
+
+def _checksum_path(path: Path) -> Path:
+    return path.with_name(path.name + ".sha256")
+
+
+def _read(path: Path, checked: bool) -> GPDM:
+    """The model in ``path``, verified: its checksum (``checked``: the cache's), then that it is the
+    model of the data and settings its name stands for. A ValueError says what is wrong."""
+    data = path.read_bytes()
+    if checked:
+        try:
+            recorded = _checksum_path(path).read_text().strip()
+        except (OSError, UnicodeDecodeError):
+            recorded = None
+        if recorded is not None and recorded != sha256(data):
+            raise ValueError("its checksum differs from the one recorded beside it")
+    try:
+        model = GPDM.load(path)
+        name = model_path(_sequences(model), model.settings).name
+    except NPZ_ERRORS as exc:
+        raise ValueError(f"not a readable model ({type(exc).__name__}: {exc})") from None
+    if name != path.name:
+        raise ValueError("it is the model of other data or settings")
+    return model
+
+
+def _warn(message: str) -> None:
+    print(f"latentoc: warning: {message}", file=sys.stderr)
+
+
+def _store(model: GPDM, path: Path) -> None:
+    """Write ``model`` to ``path`` and its checksum beside it, each under a temporary name first."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".npz")
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        model.save(tmp)
+        digest = sha256(tmp.read_bytes())
+        atomic_write(_checksum_path(path), lambda f: f.write(digest + "\n"))
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def learned_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) -> GPDM:
-    """:func:`learn_gpdm` of ``Y``, read from the cache when it was learned before on this machine."""
+    """:func:`learn_gpdm` of ``Y``, read from the cache (or the shipped models) when it was learned
+    before; a cached file that fails its checks is learned again with a warning (module doc)."""
     path = model_path(Y, settings)
-    for known in (path, SHIPPED / path.name):
-        if known.exists():
-            try:
-                return GPDM.load(known)
-            except (OSError, ValueError, KeyError):  # a damaged file: learned again and replaced
+    for known, checked in ((path, True), (SHIPPED / path.name, False)):
+        if not known.exists():
+            continue
+        try:
+            model = _read(known, checked)
+        except (OSError, ValueError) as exc:
+            _warn(f"the cached GPDM {known} is damaged or foreign ({exc}); learning it again")
+            continue
+        if checked and not _checksum_path(known).exists():
+            try:  # a model cached before checksums were recorded, verified above: its checksum now
+                _store(model, known)
+            except OSError:
                 pass
+        return model
     model = learn_gpdm(Y, settings)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz", delete=False) as tmp:
-            model.save(tmp.name)
-        os.replace(tmp.name, path)
+        _store(model, path)
     except OSError:  # a read-only cache: the model is still returned
         pass
     return model
