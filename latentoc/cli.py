@@ -1,21 +1,25 @@
 """Command line: ``python -m latentoc {list,show,learn,solve,sweep,start-poses,reproduce,bench} ...``.
 
-Input errors (:class:`latentoc.LatentocError`: bad problem, infeasible tube, ...) print
-``latentoc: error: <message>`` and exit with code 2 without writing anything; any other
-exception is a bug and ends with its traceback (exit code 1). A solve that Ipopt does not
-finish successfully exits with code 1 and writes nothing unless ``--keep-failed``; a sweep with
-failed tasks writes the others and exits with code 1.
+Input errors (:class:`latentoc.LatentocError`: bad problem, infeasible tube, an ``--out`` that
+cannot be written, ...) print ``latentoc: error: <message>`` and exit with code 2 without
+writing anything; any other exception is a bug and ends with its traceback (exit code 1). A
+solve that Ipopt does not finish successfully exits with code 1 and writes nothing unless
+``--keep-failed``; a sweep with failed or unsuccessful tasks writes the others and exits with
+code 1. Ctrl-C prints ``latentoc: interrupted`` and exits with code 130, writing no result of the
+interrupted solve; a closed stdout (``latentoc list | head``) ends quietly with code 141.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from importlib import import_module
 from pathlib import Path
 from typing import Any
 
 from .errors import LatentocError, SweepError
+from .files import check_out_dir
 
 __all__ = ["main"]
 
@@ -113,6 +117,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
     if args.stride < 1 or args.latent_dim < 1:
         raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
+    check_out_dir(args.out)
     learned, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
                                 plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
                                 start=args.start, stop=args.stop, fps=args.fps)
@@ -175,6 +180,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from .problem import load_problem
 
     problem = load_problem(args.problem, **_overrides(args, "tube", "latent_dim", "control_points", "hessian"))
+    out = check_out_dir(args.out if args.out is not None else Path("out") / f"{problem.name}-{args.method}")
     gpdm = None
     if args.gpdm is not None:
         from .learn import load_learned_gpdm
@@ -184,7 +190,6 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if not r.success and not args.keep_failed:
         print("latentoc: solve did not succeed; nothing written (use --keep-failed to write anyway)", file=sys.stderr)
         return 1
-    out = args.out if args.out is not None else Path("out") / f"{r.problem}-{r.method}"
     paths = r.save(out)
     print("  wrote " + ", ".join(str(p) for p in paths))
     if args.plots:
@@ -221,11 +226,15 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from .sweep import format_table, sweep, write_sweep
 
     problem = load_problem(args.problem, **_overrides(args, "latent_dim", "hessian"))
+    if args.tubes == [] or args.ranges == []:
+        raise SweepError(f"--{'tubes' if args.tubes == [] else 'ranges'} needs at least one value (leave it out "
+                         "for the problem's own)")
     tubes = problem.sweep_tubes if args.tubes is None else [_tube_arg(t) for t in args.tubes]
     ranges: list[float] = []
     if args.baseline == "joint-range":
         ranges = problem.sweep_ranges if args.ranges is None else args.ranges
     out = args.out
+    check_out_dir(out if out is not None else Path("out") / f"{problem.name}-sweep")
     client = _executor(args)
     try:
         outcome = sweep(problem, tubes, client, baseline_ranges=ranges, out=out, resume=args.resume,
@@ -251,7 +260,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         print(f"latentoc: task {f.label} failed: {f.error}: {f.message}", file=sys.stderr)
         if f.traceback and not f.input_error:
             print(f.traceback, file=sys.stderr)
-    return 1 if outcome.failures else 0
+    for r in outcome.unsuccessful:
+        what = f"tube {r.tube.spec}" if r.tube is not None else f"joint range {r.details.get('joint_range_deg')}"
+        print(f"latentoc: {what} did not succeed: {r.details.get('rejected') or r.status} (--resume solves it "
+              "again)", file=sys.stderr)
+    return 1 if outcome.failures or outcome.unsuccessful else 0
 
 
 def _cmd_start_poses(args: argparse.Namespace) -> int:
@@ -325,5 +338,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("latentoc: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of stdout has gone (| head): stop quietly, as Unix tools do
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python's flush at exit would fail again
+        return 141
     finally:
         set_quiet(was_quiet)

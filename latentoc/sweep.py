@@ -13,8 +13,15 @@ files (:meth:`~latentoc.results.Result.files`), so a worker needs only the insta
   tube's optimum, which makes a sweep serial. A failed task is reported with its tube and error
   (:class:`SweepFailure`); the others still finish and are written.
 
+A warm-started tube's result is never worse than the optimum it started from, which is feasible
+for the larger tube: when the warm solve fails or ends worse than its start, the tube is solved
+cold (from the training fit) and the better kept (:func:`no_worse_than_start`; a kind that solved
+both starts itself, the jump, is not solved again). If even that is worse than the start, the
+result is marked not successful (``details["rejected"]``). The row says which start was kept.
+
 With ``out``, each task's folder ``out/<label>/`` is written as its result arrives, and
-``resume=True`` skips the tasks whose folder is complete (it has a ``result.json``).
+``resume=True`` skips the tasks whose folder holds a successful result; a folder that does not
+load or holds a failed solve is solved again. Ctrl-C stops the sweep at once (KeyboardInterrupt).
 """
 
 from __future__ import annotations
@@ -29,11 +36,15 @@ from typing import Any
 from .api import solve
 from .errors import LatentocError, SweepError
 from .problem import Problem, parse_tube
-from .results import Result, atomic_write, load_result, write_files, write_json
+from .errors import ResultFileError
+from .results import RESULT_NAME, Result, atomic_write, load_result, write_files, write_json
 from .solve import tube_delta
 
 __all__ = ["SweepTask", "SweepFailure", "SweepResult", "sweep", "sweep_tasks", "run_task", "format_table",
-           "write_sweep", "summary_row"]
+           "write_sweep", "summary_row", "no_worse_than_start"]
+
+#: a tube's cost may be worse than its warm start's by this fraction of the start's cost (rounding)
+START_RTOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -71,10 +82,17 @@ class SweepResult:
     results: list[Result] = field(default_factory=list)
     failures: list[SweepFailure] = field(default_factory=list)
 
+    @property
+    def unsuccessful(self) -> list[Result]:
+        """The results whose solve did not succeed (a solver status, or worse than their start)."""
+        return [r for r in self.results if not r.success]
+
 
 def sweep_tasks(problem: Problem, tubes: Sequence[float | str],
                 baseline_ranges: Sequence[float] = ()) -> list[SweepTask]:
     """The tasks of a sweep: a latent solve per tube, then a joint-range solve per range."""
+    if not tubes and not baseline_ranges:
+        raise SweepError("a sweep needs at least one tube or joint range, none were given")
     for t in tubes:
         parse_tube(t)
     if any(not k > 0 for k in baseline_ranges):
@@ -106,11 +124,14 @@ def sweep(problem: Problem, tubes: Sequence[float | str] | None = None, executor
     tasks = sweep_tasks(problem, problem.sweep_tubes if tubes is None else tubes, baseline_ranges)
     if resume and out is None:
         raise SweepError("resume needs the output folder the earlier run wrote")
+    say = progress or (lambda line: None)
     done: dict[str, Result] = {}
     if resume and out is not None:
-        done = {t.label: _resumed(t, Path(out) / t.label) for t in tasks if (Path(out) / t.label / "result.json").is_file()}
+        for t in tasks:
+            kept = _resumed(t, Path(out) / t.label, say)
+            if kept is not None:
+                done[t.label] = kept
     todo = [t for t in tasks if t.label not in done]
-    say = progress or (lambda line: None)
     if executor is None:
         outcome = _serial(problem, todo, out, warm_start, say, len(tasks), len(done))
     else:
@@ -121,14 +142,24 @@ def sweep(problem: Problem, tubes: Sequence[float | str] | None = None, executor
     return SweepResult(results=results, failures=failures)
 
 
-def _resumed(task: SweepTask, folder: Path) -> Result:
-    """The result a resumed sweep keeps: read, and solved with this task's settings."""
-    r = load_result(folder)
+def _resumed(task: SweepTask, folder: Path, say: Callable[[str], None]) -> Result | None:
+    """The result a resumed sweep keeps: a successful one, solved with this task's settings; None
+    (solve it again) for no folder, one that does not load or a solve that did not succeed."""
+    if not (folder / RESULT_NAME).is_file():
+        return None
+    try:
+        r = load_result(folder)
+    except ResultFileError as exc:
+        say(f"{task.label}: solving again: {exc}")
+        return None
     settings = dict(task.problem["settings"], **({"tube": task.tube} if task.method == "latent" else {}))
     differ = sorted(k for k in settings if r.settings.get(k) != settings[k])
     if differ or r.method != task.method:
         raise SweepError(f"{folder} was written for other settings ({', '.join(differ) or 'method'}); "
                          "resume in the folder of the same sweep, or write to another")
+    if not r.success:
+        say(f"{task.label}: solving again: the earlier solve ended {r.status}")
+        return None
     return r
 
 
@@ -152,6 +183,9 @@ def _serial(problem: Problem, tasks: list[SweepTask], out: str | Path | None, wa
                     smaller = [s for s in solved if s[0] <= delta]
                     previous = max(smaller, key=lambda s: s[0])[1] if smaller else None
             r = solve(p, method=task.method, joint_range_deg=task.joint_range_deg, warm_start=previous)
+            if previous is not None:
+                r = no_worse_than_start(r, previous, lambda: solve(p, method=task.method,
+                                                                   joint_range_deg=task.joint_range_deg))
         except LatentocError as exc:
             outcome[task.label] = SweepFailure(task.label, type(exc).__name__, str(exc), input_error=True)
             say(f"[{skipped + i + 1}/{total}] {task.label}: failed: {exc}")
@@ -161,7 +195,48 @@ def _serial(problem: Problem, tasks: list[SweepTask], out: str | Path | None, wa
         _write(out, task.label, r.files())
         outcome[task.label] = r
         say(_line(skipped + i + 1, total, task, r))
+        if "sweep_start" in r.details:
+            say("  " + _start_note(r))
     return outcome
+
+
+def _improvement(a: Result, b: Result) -> float:
+    """How much better ``a`` is than ``b``, in cost units (both of one problem: one cost_initial;
+    gain_pct grows with a better result, whether the cost is minimised or maximised)."""
+    return (a.gain_pct - b.gain_pct) / 100.0 * abs(a.cost_initial)
+
+
+def _worse(r: Result, start: Result) -> bool:
+    return _improvement(start, r) > START_RTOL * max(abs(start.cost), 1e-12)
+
+
+def no_worse_than_start(r: Result, start: Result, solve_cold: Callable[[], Result]) -> Result:
+    """``r``, a tube's result warm-started from ``start`` (the optimum of a smaller tube, feasible
+    here), or, if it failed or is worse than ``start``, the better of it and ``solve_cold()``;
+    marked not successful if even that is worse than ``start`` (module doc)."""
+    if not r.details.get("warm_start") or (r.success and not _worse(r, start)):
+        return r
+    warm = r
+    if "other_start" not in r.details:  # the kind did not solve from both starts itself
+        cold = solve_cold()
+        r = cold if (cold.success, cold.gain_pct) > (warm.success, warm.gain_pct) else warm
+        r.details["sweep_start"] = {
+            "start": str(start.tube.spec if start.tube is not None else start.problem), "start_cost": start.cost,
+            "warm_cost": warm.cost, "warm_status": warm.status, "cold_cost": cold.cost, "cold_status": cold.status,
+            "kept": "cold" if r is cold else "warm"}
+    if r.success and _worse(r, start):
+        r.success = False
+        r.details["rejected"] = (f"cost {r.cost:.6g} is worse than {start.cost:.6g}, the optimum of the smaller "
+                                 f"tube {start.tube.spec if start.tube is not None else '?'} it started from, "
+                                 "which is feasible here")
+    return r
+
+
+def _start_note(r: Result) -> str:
+    s = r.details["sweep_start"]
+    return (f"the warm start from {s['start']} ended {s['warm_status']} at cost {s['warm_cost']:.6g}, worse than "
+            f"its start's {s['start_cost']:.6g}: solved cold ({s['cold_status']}, cost {s['cold_cost']:.6g}), "
+            f"kept the {s['kept']} solve")
 
 
 def _distributed(executor: Any, tasks: list[SweepTask], out: str | Path | None, say: Callable[[str], None],
@@ -202,7 +277,16 @@ def summary_row(r: Result) -> dict[str, Any]:
             "tube_spec": None if r.tube is None else r.tube.spec, "tube": None if r.tube is None else r.tube.delta,
             "tube_relative": None if r.tube is None else r.tube.relative,
             "joint_range_deg": r.details.get("joint_range_deg"), "solve_s": r.times.solve_s,
-            "warm_start": r.details.get("warm_start", False), "violations": r.violations}
+            "warm_start": r.details.get("warm_start", False), "start": _start(r),
+            "rejected": r.details.get("rejected"), "violations": r.violations}
+
+
+def _start(r: Result) -> str:
+    """Where the kept solve started: "cold", "warm", or "cold, warm ended worse" (sweep_start)."""
+    s = r.details.get("sweep_start")
+    if s is not None:
+        return f"{s['kept']} (the warm start ended worse than its start; both solved)"
+    return "warm" if r.details.get("warm_start") else "cold"
 
 
 def format_table(results: Sequence[Result]) -> str:
@@ -229,11 +313,18 @@ def format_table(results: Sequence[Result]) -> str:
         lines.append(f"\nlatent: d = {lat[0].settings['latent_dim']}, initial cost {lat[0].cost_initial:.2f}")
     if jr:
         lines.append(f"joint range: initial cost {jr[0].cost_initial:.2f}")
+    lines += [f"{r.tube.spec if r.tube is not None else r.problem}: {_start_note(r)}" for r in lat
+              if "sweep_start" in r.details]
+    lines += [f"{r.tube.spec if r.tube is not None else r.problem}: not successful: {r.details['rejected']}"
+              for r in lat if r.details.get("rejected")]
     return "\n".join(lines)
 
 
 def _ok(r: Result) -> str:
-    return "ok" if r.success else r.status
+    if r.details.get("rejected"):
+        return "worse than its start"
+    status = "ok" if r.success else r.status
+    return status + (f", {r.details['sweep_start']['kept']} kept" if "sweep_start" in r.details else "")
 
 
 def write_sweep(outcome: SweepResult, out_dir: str | Path, meta: dict[str, Any] | None = None) -> tuple[Path, Path]:
