@@ -72,6 +72,7 @@ def skeleton_chain(asf: str | Path, bones: list[str], mass: float = 63.86, heigh
     world), de Leva masses of a subject of ``mass`` kg and ``height`` m, joints ``<bone>_<dof>`` as
     in the CMU humanoid; a :class:`~latentoc.robots.RobotFileError` if the file or a bone is wrong."""
     from .mocap.anthropometry import BONE_MAP
+    from .robot_checks import check_model
     from .robots import RobotFileError
 
     path = Path(asf)
@@ -90,6 +91,10 @@ def skeleton_chain(asf: str | Path, bones: list[str], mass: float = 63.86, heigh
     model = build_model(skeleton, inertias=inertias, bones=list(bones), fixed_base=True, name=path.stem)
     if model.nv == 0:
         raise RobotFileError(f"skeleton {path}: the bones {', '.join(bones)} have no degrees of freedom")
+    try:
+        check_model(model, f"skeleton {path}")
+    except ValueError as exc:
+        raise RobotFileError(str(exc)) from None
     return model
 
 

@@ -12,6 +12,8 @@ A problem file's ``training`` is a name of :data:`TRAINING_MOTIONS` or a table n
 (non-uniform time stamps, or a given ``rate``, resampled by a cubic spline through the samples),
 inside the robot's joint limits (or clipped to them with ``clip_to_limits``), and the robot
 reduced to the joints the file moves, the others locked at ``fixed_pose`` or the model's neutral.
+A continuous joint (a URDF's ``continuous``) takes one angle, in rad, with no limits
+(:func:`latentoc.robots.continuous_as_revolute`).
 Every problem is a :class:`~latentoc.motion_files.MotionFileError` naming the file.
 """
 from __future__ import annotations
@@ -26,6 +28,7 @@ import pinocchio as pin
 from scipy.interpolate import CubicSpline
 
 from .motion_files import FORMATS, MotionFileError, RawMotion, read_raw_motion
+from .robots import continuous_as_revolute
 from .schema import Check
 
 __all__ = ["Demonstration", "TRAINING", "TRAINING_MOTIONS", "demonstration_from_file", "load_demonstration",
@@ -248,6 +251,7 @@ def demonstration_from_file(path: str | Path, model: pin.Model, *, fmt: str | No
     """The motion in the file ``path`` on the robot ``model`` (module doc); ``start``, ``stop``:
     the samples start .. stop - 1 (0-based, in file order)."""
     path = Path(path)
+    model = continuous_as_revolute(model)  # one angle per continuous joint, unbounded
     raw = read_raw_motion(path, model, fmt, None if asf is None else Path(asf), fps)
     n = len(raw.t)
     a, b = (0 if start is None else start), (n if stop is None else stop)

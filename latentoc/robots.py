@@ -11,7 +11,8 @@ A problem file's ``robot`` is such a name or a table naming the user's own model
     robot = { urdf = "arm.urdf", free_flyer = false, package_dirs = ["."] }
     robot = { asf = "subject.asf", bones = ["lhumerus", "lradius"], mass = 70.0, height = 1.8 }
 
-Only the URDF's kinematic and inertial tags are read (no meshes), so mesh-less URDFs work;
+Only the URDF's kinematic and inertial tags are read (no meshes), so mesh-less URDFs work; its
+masses, inertias and limits are checked (:mod:`latentoc.robot_checks`);
 ``package_dirs`` resolve a ``package://`` URDF path. An ASF skeleton becomes a fixed-base chain
 of the listed bones with de Leva masses, as the CMU humanoid is built (:mod:`latentoc.mocap`).
 """
@@ -24,13 +25,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+import numpy as np
 import pinocchio
 
 from .errors import LatentocError
+from .robot_checks import check_urdf
 from .schema import Check
 
 __all__ = ["load_robot", "robot_names", "example_robot_data_dir", "UnknownRobotError", "RobotFileError", "ROBOT",
-           "load_urdf", "robot_from_setting", "robot_files", "describe_robot"]
+           "load_urdf", "robot_from_setting", "robot_files", "describe_robot", "continuous_as_revolute"]
 
 
 class UnknownRobotError(LatentocError, LookupError):
@@ -162,6 +165,10 @@ def load_urdf(path: str | Path, free_flyer: bool = False,
         raise RobotFileError(f"URDF {urdf} cannot be read: {exc}") from None
     if root.tag != "robot":
         raise RobotFileError(f"URDF {urdf}: the root element is <{root.tag}>, a URDF's is <robot>")
+    try:  # masses, inertias and limits that pinocchio would take as they are (module robot_checks)
+        check_urdf(root, urdf)
+    except ValueError as exc:
+        raise RobotFileError(str(exc)) from None
     try:
         if free_flyer:
             model = pinocchio.buildModelFromUrdf(str(urdf), pinocchio.JointModelFreeFlyer())
@@ -238,3 +245,38 @@ def robot_from_setting(setting: str | dict[str, Any], base_dir: str | Path = "."
     from .human_models import skeleton_chain
 
     return skeleton_chain(base / setting["asf"], setting["bones"], setting["mass"], setting["height"])
+
+
+# pinocchio's continuous joints (q = cos, sin of the angle) and the revolute joint of the same axis
+_CONTINUOUS = {"JointModelRUBX": pinocchio.JointModelRX, "JointModelRUBY": pinocchio.JointModelRY,
+               "JointModelRUBZ": pinocchio.JointModelRZ}
+
+
+def continuous_as_revolute(model: pinocchio.Model) -> pinocchio.Model:
+    """``model`` with each continuous joint (pinocchio's revolute-unbounded: two coordinates, cos
+    and sin) a revolute joint about the same axis with unbounded limits, so that it takes one
+    angle like every other joint (nq = nv); the same model (dynamics, frames) otherwise. Returns
+    ``model`` itself when it has no continuous joint."""
+    kinds = [model.joints[j].shortname() for j in range(1, model.njoints)]
+    if not any(k in _CONTINUOUS or k == "JointModelRevoluteUnboundedUnaligned" for k in kinds):
+        return model
+    new = pinocchio.Model()
+    new.name, new.gravity = model.name, model.gravity
+    for j, kind in enumerate(kinds, start=1):
+        jm = model.joints[j]
+        iq, iv = jm.idx_q, jm.idx_v
+        lo, hi = model.lowerPositionLimit[iq:iq + jm.nq], model.upperPositionLimit[iq:iq + jm.nq]
+        joint = jm
+        if kind in _CONTINUOUS:
+            joint, lo, hi = _CONTINUOUS[kind](), np.array([-np.inf]), np.array([np.inf])
+        elif kind == "JointModelRevoluteUnboundedUnaligned":
+            joint, lo, hi = pinocchio.JointModelRevoluteUnaligned(jm.extract().axis), np.array([-np.inf]), np.array([np.inf])
+        jid = new.addJoint(model.parents[j], joint, model.jointPlacements[j], model.names[j],
+                           model.effortLimit[iv:iv + jm.nv], model.velocityLimit[iv:iv + jm.nv], lo, hi)
+        new.appendBodyToJoint(jid, model.inertias[j], pinocchio.SE3.Identity())
+    for f in model.frames[1:]:  # the same frames, in the same order (parent frame indices hold)
+        new.addFrame(pinocchio.Frame(f.name, f.parentJoint, f.parentFrame, f.placement, f.type, f.inertia), False)
+    for name in ("armature", "friction", "damping", "rotorInertia", "rotorGearRatio"):
+        if hasattr(model, name):
+            setattr(new, name, getattr(model, name).copy())
+    return new
