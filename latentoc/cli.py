@@ -65,6 +65,12 @@ def _parser() -> argparse.ArgumentParser:
     ln.add_argument("--stop", type=int, default=None, help="one past the last frame")
     ln.add_argument("--fps", type=float, default=120.0, help="frame rate of an .amc motion (default 120)")
 
+    pl = sub.add_parser("plot", help="every figure of a result folder, from its files alone")
+    pl.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz, gpdm.npz)")
+    pl.add_argument("--format", choices=["png", "pdf", "svg"], default="png")
+    pl.add_argument("--out", type=Path, default=None, help="output folder (default: RESULT/plots)")
+    pl.add_argument("--no-gif", action="store_true", help="no motion.gif")
+
     ls = sub.add_parser("list", help="list the packaged problems")
     ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
     sh = sub.add_parser("show", help="a problem's resolved settings, one key per line")
@@ -132,6 +138,14 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
           f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
     print("  wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .plots import plot_solution
+
+    paths = plot_solution(args.result, gif=not args.no_gif, out_dir=args.out, format=args.format)
+    print(f"wrote {len(paths)} figures to {paths[0].parent}: " + ", ".join(p.name for p in paths))
     return 0
 
 
@@ -251,11 +265,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                 "scheduler": args.scheduler, "warm_start": client is None and not args.cold}
         print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))
     if args.plots and outcome.results:
-        from .plots import plot_gain_vs_tube
+        from .plots import plot_gain_vs_tube, save
 
         folder = out if out is not None else Path("out") / f"{problem.name}-sweep"
-        print("wrote " + str(plot_gain_vs_tube(outcome.results, folder / "gain_vs_tube.png",
-                                               title=f"{problem.name}: gain vs tube")))
+        print("wrote " + str(save(plot_gain_vs_tube(outcome.results, title=f"{problem.name}: gain vs tube"),
+                                  folder / "gain_vs_tube.png")))
     for f in outcome.failures:
         print(f"latentoc: task {f.label} failed: {f.error}: {f.message}", file=sys.stderr)
         if f.traceback and not f.input_error:
@@ -327,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
 
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
-    commands = {"list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
+    commands = {"plot": _cmd_plot, "list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
                 "reproduce": _cmd_reproduce,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:

@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
 
+from .files import NPZ_ERRORS, dumps_json
 from .gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
 from .motions import Demonstration, check_frames, demonstration_from_file
 from .results import GPDM_NAME, write_files
@@ -114,18 +115,18 @@ def _variance_png(learned: LearnedMotion) -> bytes:
 
 def figures(learned: LearnedMotion, title: str) -> dict[str, bytes]:
     """The PNG figures by file name (module doc)."""
-    from .plots import plot_joint_curves, plot_latent_tube
+    from .plots import plot_joint_curves, plot_latent_tube, save
 
     g, demo = learned.gpdm, learned.demonstration
     out = {"variance.png": _variance_png(learned)}
+    figs = {"reconstruction.png": plot_joint_curves(demo.t[learned.frames], {"demonstration": g.Y,
+                                                                             "GPDM mean (Eq. 18)": g.mean(g.X)},
+                                                    demo.joint_names)}
+    if g.latent_dim in (2, 3):
+        figs["latent_tube.png"] = plot_latent_tube(g, g.tube_size(), paths={"training path": g.latent_trajectories()[0]},
+                                                   title=f"{title}: tube at tube_training = {g.tube_size():.3g}")
     with tempfile.TemporaryDirectory() as tmp:
-        paths = [plot_joint_curves(demo.t[learned.frames], {"demonstration": g.Y, "GPDM mean (Eq. 18)": g.mean(g.X)},
-                                   demo.joint_names, Path(tmp) / "reconstruction.png")]
-        if g.latent_dim in (2, 3):
-            paths.append(plot_latent_tube(g, g.tube_size(), Path(tmp) / "latent_tube.png",
-                                          paths={"training path": g.latent_trajectories()[0]},
-                                          title=f"{title}: tube at tube_training = {g.tube_size():.3g}"))
-        out.update({p.name: p.read_bytes() for p in paths})
+        out.update({name: save(fig, Path(tmp) / name).read_bytes() for name, fig in figs.items()})
     return out
 
 
@@ -143,7 +144,7 @@ def learn_file(path: str | Path, robot: str, out: str | Path, *, latent_dim: int
     if plots:
         files.update(figures(learned, Path(path).stem))
     summary = {"robot": robot, **learned.summary()}
-    files[LEARN_NAME] = (json.dumps(summary, indent=2) + "\n").encode()
+    files[LEARN_NAME] = dumps_json(summary).encode()
     return learned, write_files(files, out, marker=LEARN_NAME)
 
 
@@ -155,5 +156,5 @@ def load_learned_gpdm(path: str | Path) -> GPDM:
         raise GPDMInputError(f"GPDM file {path} does not exist")
     try:
         return GPDM.load(path)
-    except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
-        raise GPDMInputError(f"{path} is not a GPDM written by latentoc ({exc})") from None
+    except NPZ_ERRORS as exc:
+        raise GPDMInputError(f"{path} is not a GPDM written by latentoc ({type(exc).__name__}: {exc})") from None

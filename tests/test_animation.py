@@ -1,4 +1,5 @@
-"""Animation: GIF frame count and size; the 3-D view names its missing optional package."""
+"""Animation: the GIF's frames, size and timing (frame k starts at k/fps), the initial motion's ghost;
+the live 3-D view names its missing optional package."""
 
 from __future__ import annotations
 
@@ -31,6 +32,47 @@ def test_animate_writes_gif(tmp_path):
         assert im.n_frames == len(animation.frame_times(t, 8)) == 9
         w, h = animation.ANIMATION_SIZE
         assert im.size == (int(w * DPI), int(h * DPI))
+
+
+@pytest.mark.parametrize("fps", [25, 15, 30])
+def test_gif_plays_at_the_motions_speed(tmp_path, fps):
+    """GIF delays are whole centiseconds: each frame k starts within 5 ms of k/fps, and the loop lasts
+    the frames' share of motion time (15 fps with a fixed 6 cs delay played 10 % fast)."""
+    delays = animation.frame_delays_cs(50, fps)
+    starts = np.concatenate([[0], np.cumsum(delays)]) / 100.0
+    assert np.allclose(starts, np.arange(51) / fps, atol=0.005)
+    t, Q = arm_training_motion()
+    model = build_human_arm()
+    p = animation.animate(model, t[:61], Q[:61], tmp_path / "arm.gif", fps=fps, plane="yz")
+    with Image.open(p) as im:
+        got = []
+        for k in range(im.n_frames):
+            im.seek(k)
+            got.append(im.info["duration"])
+    assert got == [10 * d for d in animation.frame_delays_cs(len(got), fps)]
+    assert abs(sum(got) / 1000.0 - len(got) / fps) <= 0.005
+
+
+def test_gif_shows_the_initial_motion(tmp_path):
+    """With the initial motion, its ghost's grey is drawn in every frame: hundreds of pixels more of it
+    than without (where only anti-aliased edges come near that grey)."""
+    t, Q = arm_training_motion()
+    model = build_human_arm()
+    t, Q = t[:61], Q[:61]
+    grey = np.array([0xb3, 0xb3, 0xb3])
+
+    def ghost_pixels(path):
+        with Image.open(path) as im:
+            counts = []
+            for k in range(im.n_frames):
+                im.seek(k)
+                rgb = np.asarray(im.convert("RGB")).astype(int)
+                counts.append(int(np.sum(np.all(np.abs(rgb - grey) <= 6, axis=2))))
+        return counts
+
+    with_ghost = animation.animate(model, t, Q, tmp_path / "a.gif", fps=10, plane="yz", initial=Q[::-1].copy())
+    without = animation.animate(model, t, Q, tmp_path / "b.gif", fps=10, plane="yz")
+    assert min(ghost_pixels(with_ghost)) > max(ghost_pixels(without)) + 300
 
 
 def test_animate_checks_lengths(tmp_path):

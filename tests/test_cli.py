@@ -114,6 +114,26 @@ def test_solve_plots_writes_png_figures_of_the_solution(tmp_path, capsys):
     assert "plots: " in capsys.readouterr().out
 
 
+def test_plot_writes_every_figure_of_a_result_folder(tmp_path, capsys):
+    """`plot RESULT --format pdf --out DIR`: the figures from the folder's files alone; a folder
+    without result.json is an input error."""
+    from result_factory import make_result
+
+    r = make_result()
+    r.convergence = [{"phase": "latent", "round": 1, "history": {k: [0.0, 1.0] for k in
+                                                               ("iter", "objective", "inf_pr", "inf_du", "mu",
+                                                                "alpha_pr", "alpha_du")}}]
+    r.save(tmp_path / "r")
+    assert main(["plot", str(tmp_path / "r"), "--format", "pdf", "--out", str(tmp_path / "figs"), "--no-gif"]) == 0
+    names = sorted(p.name for p in (tmp_path / "figs").iterdir())
+    assert names == sorted(f"{k}.pdf" for k in ("joint_angles", "joint_velocities", "torques", "stick_frames",
+                                                "convergence"))
+    assert all((tmp_path / "figs" / n).read_bytes().startswith(b"%PDF") for n in names)
+    assert "wrote 5 figures" in capsys.readouterr().out
+    assert main(["plot", str(tmp_path / "figs")]) == 2
+    assert "no result.json" in capsys.readouterr().err
+
+
 def test_solve_summary_reports_the_contact_checks():
     """For a contact problem the summary prints the exported motion's 1 kHz checks, as the
     result's details (here verify's numbers for a static stance, numeric Pinocchio) hold them."""

@@ -132,6 +132,33 @@ def test_the_limits_and_the_tube_hold_on_the_1khz_grid(user, torque):
     assert max(torque.violations.values()) <= 1e-6
 
 
+def test_the_figures_draw_the_urdfs_limits(torque):
+    """`plot`'s joint-angle, velocity and torque panels draw each joint's limits as the UR5's URDF
+    gives them (read here from the XML, not through pinocchio)."""
+    import xml.etree.ElementTree as ET
+
+    from latentoc.plots import LIMIT_STYLE, solution_figures
+    from latentoc.robots import example_robot_data_dir
+
+    urdf = ET.parse(example_robot_data_dir() / "ur_description/urdf/ur5_robot.urdf").getroot()
+    limits = {j.get("name"): {k: float(v) for k, v in j.find("limit").attrib.items()}
+              for j in urdf.iter("joint") if j.get("type") == "revolute"}
+    figs = solution_figures(torque)
+
+    def drawn(ax):
+        return sorted(float(line.get_ydata()[0]) for line in ax.get_lines() if line.get_color() == LIMIT_STYLE["color"])
+
+    for name, scale, keys in (("joint_angles", np.degrees(1.0), ("lower", "upper")),
+                              ("joint_velocities", np.degrees(1.0), ("velocity",)),
+                              ("torques", 1.0, ("effort",))):
+        panels = [ax for ax in figs[name].axes if ax.get_title() in UR5]
+        assert sorted(ax.get_title() for ax in panels) == sorted(UR5)
+        for ax in panels:
+            lim = limits[ax.get_title()]
+            expected = [lim["lower"], lim["upper"]] if len(keys) == 2 else [-lim[keys[0]], lim[keys[0]]]
+            assert np.allclose(drawn(ax), scale * np.array(sorted(expected)), rtol=1e-12), (name, ax.get_title())
+
+
 def test_the_cost_is_below_the_demonstrations(torque):
     demo = demonstration_costs(load_robot("ur5"))["torque"]
     assert torque.success and torque.cost < demo

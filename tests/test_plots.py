@@ -1,10 +1,13 @@
-"""Plots: every figure writes a PNG of its documented size; tube mesh and stick figures are exact."""
+"""Plots: every figure is a Figure that draws on given axes and saves as PNG/PDF/SVG; what it draws
+is checked against independent numbers (the tube's level set, forward kinematics, the limits given,
+Ipopt's history, a static pose's ZMP)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from matplotlib.figure import Figure
 from PIL import Image
 from result_factory import make_result
 
@@ -38,6 +41,12 @@ def check_png(path, name, rows=1):
         assert im.size == plots.pixel_size(name, rows)
 
 
+def limit_lines(ax) -> list[float]:
+    """The y values of the horizontal limit lines drawn in ``ax`` (LIMIT_STYLE)."""
+    return sorted(float(line.get_ydata()[0]) for line in ax.get_lines()
+                  if line.get_color() == plots.LIMIT_STYLE["color"] and line.get_linestyle() == plots.LIMIT_STYLE["ls"])
+
+
 def test_tube_mesh_lies_on_the_level_set(gpdm3):
     delta = 2.0 * gpdm3.tube_size()
     P, ok = plots.tube_mesh(gpdm3, delta, n_along=20, n_around=12)
@@ -45,7 +54,7 @@ def test_tube_mesh_lies_on_the_level_set(gpdm3):
     v = gpdm3.variance(P[ok])  # independent evaluation of Eq. 19
     assert np.allclose(v, delta, rtol=1e-4)
     # the centre curve is inside the tube and the surface is the first crossing along each ray
-    C = plots._resample(gpdm3.latent_trajectories()[0], 20)
+    C = plots.resample(gpdm3.latent_trajectories()[0], 20)
     assert np.all(gpdm3.variance(C) <= delta)
     R = P - C[:, None, :]
     for f in (0.25, 0.5, 0.9):
@@ -58,54 +67,97 @@ def test_tube_mesh_requires_3d(gpdm2):
 
 
 @pytest.mark.parametrize("which", ["gpdm3", "gpdm2"])
-def test_plot_latent_tube(which, request, tmp_path):
+def test_latent_tube_has_equal_axes(which, request, tmp_path):
+    """One scale on every axis: the 3-D box's sides are proportional to the axes' data spans, the 2-D
+    aspect is 1; every latent point is inside the limits."""
     g = request.getfixturevalue(which)
     X = g.latent_trajectories()[0]
-    p = plots.plot_latent_tube(g, 2.0 * g.tube_size(), tmp_path / f"{which}.png",
-                               paths={"initial": X, "optimised": X * 1.01},
-                               control_points=X[:: max(len(X) // 8, 1)])
-    check_png(p, "latent_tube")
+    fig = plots.plot_latent_tube(g, 2.0 * g.tube_size(), paths={"initial": X, "optimised": X * 1.01},
+                                 control_points=X[:: max(len(X) // 8, 1)])
+    assert isinstance(fig, Figure)
+    ax = fig.axes[0]
+    if g.latent_dim == 3:
+        lims = np.array([ax.get_xlim(), ax.get_ylim(), ax.get_zlim()])
+        spans = lims[:, 1] - lims[:, 0]
+        box = np.asarray(ax.get_box_aspect())
+        assert np.allclose(box / box.max(), spans / spans.max())
+        assert np.all((g.X >= lims[:, 0]) & (g.X <= lims[:, 1]))
+    else:
+        assert ax.get_aspect() == 1.0
+    check_png(plots.save(fig, tmp_path / f"{which}.png"), "latent_tube")
+    with pytest.raises(ValueError, match="axes"):
+        plots.plot_latent_tube(g, 1.0, axes=Figure().add_subplot(projection="3d" if g.latent_dim == 2 else None))
 
 
-def test_joint_curves_and_torques(arm, tmp_path):
+def test_curves_draw_the_given_limits_and_skip_infinite_ones(arm, tmp_path):
     model, t, Q = arm
     names = list(model.names[1:])
-    check_png(plots.plot_joint_curves(t, {"initial": Q, "optimised": 0.9 * Q}, names,
-                                      tmp_path / "q.png"), "joint_curves")
+    lo, hi = -np.arange(1.0, 8.0), np.arange(1.0, 8.0)
+    hi[2] = np.inf  # no upper limit on the third joint
+    fig = plots.plot_joint_curves(t, {"initial": Q, "optimised": 0.9 * Q}, names, limits=(lo, hi))
+    for j, ax in enumerate(fig.axes[:7]):
+        assert ax.get_title() == names[j]
+        expected = [np.degrees(lo[j])] + ([np.degrees(hi[j])] if np.isfinite(hi[j]) else [])
+        assert np.allclose(limit_lines(ax), sorted(expected))
+        assert np.allclose(ax.get_lines()[1].get_ydata(), np.degrees(0.9 * Q[:, j]))  # the data, in degrees
+    check_png(plots.save(fig, tmp_path / "q.png"), "joint_curves")
+    v_max = np.full(7, 2.0)
+    fig = plots.plot_velocities(t, np.gradient(Q, t, axis=0), names, v_max=v_max)
+    assert np.allclose(limit_lines(fig.axes[0]), np.degrees([-2.0, 2.0]))
+    check_png(plots.save(fig, tmp_path / "v.png"), "velocities")
     tau = np.sin(t)[:, None] * np.arange(1, 8)
-    lim = (tau.min(axis=0), tau.max(axis=0))
-    check_png(plots.plot_torques(t, tau, names, tmp_path / "tau.png", limits=lim), "torques")
+    fig = plots.plot_torques(t, tau, names, limits=(-hi, hi))
+    assert np.allclose(limit_lines(fig.axes[0]), [-1.0, 1.0]) and limit_lines(fig.axes[2]) == []
+    check_png(plots.save(fig, tmp_path / "tau.png"), "torques")
     with pytest.raises(ValueError, match="expected shape"):
-        plots.plot_torques(t, tau[:, :3], names, tmp_path / "bad.png")
+        plots.plot_torques(t, tau[:, :3], names)
 
 
-def test_contact_forces_zmp_gain(tmp_path):
-    t = np.linspace(0, 1, 50)
-    F = np.zeros((50, 2, 3))
-    F[:, :, 2] = 300 * (1 + np.cos(6 * t))[:, None]
-    F[:, 0, 0] = 20 * np.sin(6 * t)
-    check_png(plots.plot_contact_forces(t, F, ["lfoot", "rfoot"], tmp_path / "f.png"),
-              "contact_forces")
-    poly = np.array([[0, -0.1], [0.25, -0.1], [0.25, 0.1], [0, 0.1]])
-    zmp = np.column_stack([0.1 + 0.05 * t, 0.02 * np.sin(9 * t)])
-    com = np.column_stack([0.12 + 0.02 * t, 0.01 * t, np.full(50, 0.9)])
-    check_png(plots.plot_zmp_com(zmp, com, poly, tmp_path / "zmp.png"), "zmp_com")
-    results = [make_result(tube=d, gain=g) for d, g in [(1e-5, 19.0), (1e-4, 31.0), (1e-6, 3.0)]]
-    check_png(plots.plot_gain_vs_tube(results, tmp_path / "gain.png",
-                                      reference=[(1e-6, 2.87), (1e-4, 31.3)]), "gain_vs_tube")
-    results += [make_result(tube=None, method="joint-range", gain=g, success=k < 40, joint_range_deg=k)
-                for k, g in [(5, 5.3), (20, 23.5), (45, 38.5)]]
-    check_png(plots.plot_gain_vs_tube(results, tmp_path / "gain2.png"), "gain_vs_tube")
-    with pytest.raises(ValueError, match="no result"):
-        plots.plot_gain_vs_tube([], tmp_path / "gain3.png")
+def test_figures_draw_on_the_callers_axes(arm):
+    """axes=: the caller's figure is returned and holds the drawing; too few axes is an error."""
+    model, t, Q = arm
+    fig = Figure()
+    axes = fig.subplots(2, 4).ravel()
+    names = list(model.names[1:])
+    assert plots.plot_joint_curves(t, Q, names, axes=axes) is fig
+    assert all(len(ax.get_lines()) == 1 for ax in axes[:7])
+    with pytest.raises(ValueError, match="7 panels"):
+        plots.plot_joint_curves(t, Q, names, axes=axes[:3])
+    fig2 = Figure()
+    row = fig2.subplots(1, 3)
+    assert plots.plot_stick_frames(model, Q, frames=3, plane="yz", axes=row) is fig2
+    assert all(ax.get_lines() for ax in row)
 
 
-def test_plot_start_poses(arm, tmp_path):
-    model, _, Q = arm
-    rows = [{"tube": d, "translational_distance": 0.1 * k, "pose_distance": 0.15 * k, "q": Q[5 * k].tolist()}
-            for k, d in enumerate([1e-3, 1e-2, 1e-1])]
-    check_png(plots.plot_start_poses(rows, tmp_path / "sp.png", model=model), "start_poses")
-    check_png(plots.plot_start_poses(rows, tmp_path / "sp2.png"), "start_poses")
+@pytest.mark.parametrize("fmt, magic", [("png", b"\x89PNG"), ("pdf", b"%PDF"), ("svg", b"<?xml")])
+def test_save_formats(arm, tmp_path, fmt, magic):
+    model, t, Q = arm
+    fig = plots.plot_joint_curves(t, Q, list(model.names[1:]))
+    path = plots.save(fig, tmp_path / f"q.{fmt}")
+    assert path.read_bytes().startswith(magic)
+    first = path.read_bytes()
+    assert plots.save(fig, tmp_path / f"q.{fmt}").read_bytes() == first  # no date stamped in: the same file
+    with pytest.raises(ValueError, match="format"):
+        plots.save(fig, tmp_path / "q.jpg")
+
+
+def test_stick_frames_carry_their_times_and_a_scale(arm, tmp_path):
+    model, t, Q = arm
+    fig = plots.plot_stick_frames(model, {"initial": Q, "optimised": Q[::-1]}, t=t, plane="yz", frames=5)
+    check_png(plots.save(fig, tmp_path / "s.png"), "stick_frames", rows=2)
+    idx = plots.frame_indices(len(Q), 5)
+    titles = [ax.get_title() for ax in fig.axes[:5]]
+    assert titles[0] == f"initial  t = {0:.2f} s"
+    assert [s.split("t = ")[1] for s in titles] == [f"{t[i] - t[0]:.2f} s" for i in idx]
+    bar = plots.scale_bar_length(1.0)
+    assert bar == 0.2 and plots.scale_bar_length(3.0) == 0.5 and plots.scale_bar_length(0.05) == 0.01
+    texts = [tx.get_text() for tx in fig.axes[0].texts]
+    assert len(texts) == 1 and texts[0].endswith(" m")
+    length = float(texts[0].split()[0])
+    bar_line = [ln for ln in fig.axes[0].get_lines() if ln.get_linewidth() == 2.5][0]
+    assert np.isclose(np.ptp(bar_line.get_xdata()), length)  # the bar is as long as it says
+    with pytest.raises(ValueError, match="times"):
+        plots.plot_stick_frames(model, Q, t=t[:-1])
 
 
 def test_stick_segments_are_forward_kinematics(arm):
@@ -138,41 +190,143 @@ def test_free_flyer_has_no_bone_to_world():
     assert S.shape == (1, 2, 3) and np.allclose(S[0, 0], [0, 0, 1]) and np.allclose(S[0, 1], [0, 0, 0.5])
 
 
-@pytest.mark.parametrize("layout", ["panels", "overlay"])
-def test_plot_stick_frames(arm, tmp_path, layout):
+def test_convergence_draws_each_run_after_the_previous(tmp_path):
+    runs = [{"phase": "phase 1", "round": 1, "history": {"iter": [0, 1, 2], "objective": [3.0, 2.0, 1.5],
+                                                         "inf_pr": [1.0, 1e-3, 1e-9], "inf_du": [1.0, 0.1, 1e-9],
+                                                         "mu": [0.1, 1e-3, 1e-9], "alpha_pr": [0, 1, 1],
+                                                         "alpha_du": [0, 0.5, 1]}},
+            {"phase": "phase 2", "round": 1, "history": {"iter": [0, 1], "objective": [1.5, 1.2], "inf_pr": [1e-9, 1e-10],
+                                                         "inf_du": [1e-2, 1e-9], "mu": [1e-4, 1e-9],
+                                                         "alpha_pr": [0, 1], "alpha_du": [0, 1]}}]
+    fig = plots.plot_convergence(runs)
+    ax = fig.axes[0]
+    obj = [ln for ln in ax.get_lines() if ln.get_label().startswith("phase")]
+    assert [ln.get_label() for ln in obj] == ["phase 1, round 1", "phase 2, round 1"]
+    assert list(obj[0].get_xdata()) == [0, 1, 2] and list(obj[1].get_xdata()) == [3, 4]
+    assert list(obj[1].get_ydata()) == [1.5, 1.2]
+    assert fig.axes[1].get_yscale() == "log" and fig.axes[2].get_yscale() == "log"
+    check_png(plots.save(fig, tmp_path / "c.png"), "convergence")
+    with pytest.raises(ValueError, match="no convergence"):
+        plots.plot_convergence([])
+
+
+def test_contact_series_of_a_static_stance():
+    """A pose held still on both feet: the ZMP is the COM's ground projection (Eq. 35 with dh = 0),
+    inside the feet's polygon by the COM's margin; the friction ratio is the wrench's."""
+    from latentoc.jump.training import jump_model, training_jumps
+
+    model, _ = jump_model()
+    q = training_jumps()[0].Q[0]
+    n = 3
+    wrench = np.tile([20.0, 0.0, 300.0, 0.0, 6.0, 0.0], (n, 1))
+    traj = {"t": np.linspace(0, 0.002, n), "q": np.tile(q, (n, 1)), "v": np.zeros((n, model.nv)),
+            "a": np.zeros((n, model.nv)), "wrench": wrench, "contact": np.ones(n, np.int8), "touchdown": 0.0,
+            "settle": 0.0, "heel_offset": np.array([-0.05, 0.0, -0.03]), "friction": 0.4,
+            "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"])}
+    s = plots.contact_series(model, traj)
+    c = pin.centerOfMass(model, model.createData(), q)
+    assert np.allclose(s["zmp"], c[:2], atol=1e-9) and np.allclose(s["com"], c)
+    assert np.allclose(s["zmp_margin"], s["com_margin"]) and np.all(s["zmp_margin"] > 0)
+    assert np.allclose(s["friction_ratio"], 20.0 / 300.0) and np.allclose(s["normal"], 300.0)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    toe = data.oMf[model.getFrameId("ltoes_end")].translation
+    heel = data.oMf[model.getFrameId("lfoot")].act(traj["heel_offset"])
+    cop = toe[0] - 6.0 / 300.0
+    assert np.allclose(s["cop_margin"], min(cop - heel[0], toe[0] - cop))
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    assert plots.polygon_margin(square, np.array([0.25, 0.5])) == pytest.approx(0.25)
+    assert plots.polygon_margin(square[::-1], np.array([1.5, 0.5])) == pytest.approx(-0.5)
+    fig = plots.plot_contact_margins(traj["t"], s, 0.4)
+    assert limit_lines(fig.axes[0]) == [0.4] and all(limit_lines(ax) == [0.0] for ax in fig.axes[1:4])
+    assert plots.plot_contact_forces(traj["t"], wrench, traj["contact"]).axes[0].get_lines()[0].get_ydata()[0] == 300.0
+
+
+def test_contact_series_agrees_with_the_jumps_own_check(small_export, small_jump):
+    """On the broad jump's 1 kHz export: the ZMP and COM margins and the friction ratio of the plots
+    (from the result schema, its own polygon and ZMP) against latentoc.jump.verify.series."""
+    from latentoc.jump.verify import series
+
+    model = small_jump.js.model
+    traj = {**small_export, "friction": 0.4}
+    ours = plots.contact_series(model, traj)
+    theirs = series(model, traj, 0.4)
+    zmp = np.nanmin(theirs["zmp"], axis=1)  # verify: per polygon edge, where enforced
+    on = np.isfinite(zmp)
+    assert on.sum() > 10 and np.array_equal(on, ours["zmp_enforced"])
+    assert np.allclose(ours["zmp_margin"][on], zmp[on], atol=1e-6)
+    com = np.nanmin(theirs["com"], axis=1)
+    on = np.isfinite(com)
+    assert np.allclose(ours["com_margin"][on], com[on], atol=1e-6)
+    contact = ours["contact"]
+    ratio = 0.4 - theirs["friction"][contact] / theirs["normal"][contact]  # verify's needed wrench
+    assert np.allclose(ours["friction_ratio"][contact], ratio, atol=1e-3)
+
+
+def test_contact_forces_zmp_gain(tmp_path):
+    t = np.linspace(0, 1, 50)
+    W = np.zeros((50, 6))
+    W[:, 2] = 300 * (1 + np.cos(6 * t))
+    W[:, 0] = 20 * np.sin(6 * t)
+    check_png(plots.save(plots.plot_contact_forces(t, W, np.ones(50)), tmp_path / "f.png"), "contact_forces")
+    poly = np.array([[0, -0.1], [0.25, -0.1], [0.25, 0.1], [0, 0.1]])
+    zmp = np.column_stack([0.1 + 0.05 * t, 0.02 * np.sin(9 * t)])
+    com = np.column_stack([0.12 + 0.02 * t, 0.01 * t, np.full(50, 0.9)])
+    check_png(plots.save(plots.plot_zmp_com(zmp, com, poly), tmp_path / "zmp.png"), "zmp_com")
+    results = [make_result(tube=d, gain=g) for d, g in [(1e-5, 19.0), (1e-4, 31.0), (1e-6, 3.0)]]
+    fig = plots.plot_gain_vs_tube(results, reference=[(1e-6, 2.87), (1e-4, 31.3)])
+    assert list(fig.axes[0].get_lines()[1].get_ydata()) == [3.0, 19.0, 31.0]  # sorted by delta
+    check_png(plots.save(fig, tmp_path / "gain.png"), "gain_vs_tube")
+    results += [make_result(tube=None, method="joint-range", gain=g, success=k < 40, joint_range_deg=k)
+                for k, g in [(5, 5.3), (20, 23.5), (45, 38.5)]]
+    check_png(plots.save(plots.plot_gain_vs_tube(results), tmp_path / "gain2.png"), "gain_vs_tube")
+    with pytest.raises(ValueError, match="no result"):
+        plots.plot_gain_vs_tube([])
+
+
+def test_plot_start_poses(arm, tmp_path):
     model, _, Q = arm
-    p = plots.plot_stick_frames(model, {"initial": Q, "optimised": Q[::-1]}, tmp_path / "s.png",
-                                plane="yz", layout=layout)
-    check_png(p, "stick_frames", rows=2)
-    assert list(plots.frame_indices(len(Q), 8)) [0] == 0
-    assert plots.frame_indices(len(Q), 8)[-1] == len(Q) - 1
-    assert len(plots.frame_indices(len(Q), 8)) == 8
+    rows = [{"tube": d, "translational_distance": 0.1 * k, "pose_distance": 0.15 * k, "q": Q[5 * k].tolist()}
+            for k, d in enumerate([1e-3, 1e-2, 1e-1])]
+    check_png(plots.save(plots.plot_start_poses(rows, model=model), tmp_path / "sp.png"), "start_poses")
+    check_png(plots.save(plots.plot_start_poses(rows), tmp_path / "sp2.png"), "start_poses")
 
 
 @pytest.mark.slow  # stick frames of 50 poses and the tube mesh
-def test_plot_solution_arm(arm, gpdm3, tmp_path):
-    """An arm result (latent path, training fit, its GPDM): angles, torques (the training fit's by
-    numeric RNEA), stick frames and the latent tube."""
+@pytest.mark.parametrize("fmt", ["png", "svg"])
+def test_plot_solution_arm(arm, gpdm3, tmp_path, fmt):
+    """An arm result (latent path, training fit, its GPDM, limits, Ipopt's history): every figure."""
     model, t, Q = arm
     X = gpdm3.latent_trajectories()[0]
     t, Q = t[::6], Q[::6]
     n = len(t)
-    traj = {"q": Q, "tau": np.sin(np.outer(t, np.arange(1, 8))), "q_initial": Q[::-1].copy(), "x": X,
-            "x_initial": X[::-1].copy(), "P": X[::10], "P_initial": X[::10] + 0.01}
-    make_result(model, n, tube=2.0 * gpdm3.tube_size(), trajectory=traj, gpdm=gpdm3).save(tmp_path)
-    paths = plots.plot_solution(tmp_path)
-    assert {p.name for p in paths} == {"joint_angles.png", "torques.png", "stick_frames.png", "latent_tube.png"}
+    history = {"iter": [0, 1], "objective": [2.0, 1.0], "inf_pr": [1, 0], "inf_du": [1, 0], "mu": [0.1, 0.01],
+               "alpha_pr": [0, 1], "alpha_du": [0, 1]}
+    traj = {"q": Q, "v": np.gradient(Q, t, axis=0), "tau": np.sin(np.outer(t, np.arange(1, 8))),
+            "q_initial": Q[::-1].copy(), "x": X, "x_initial": X[::-1].copy(), "P": X[::10], "P_initial": X[::10] + 0.01,
+            "q_min": model.lowerPositionLimit, "q_max": model.upperPositionLimit}
+    r = make_result(model, n, tube=2.0 * gpdm3.tube_size(), trajectory=traj, gpdm=gpdm3)
+    r.convergence = [{"phase": "latent", "round": 1, "history": history}]
+    r.save(tmp_path)
+    paths = plots.plot_solution(tmp_path, format=fmt)
+    assert {p.name for p in paths} == {f"{k}.{fmt}" for k in ("joint_angles", "joint_velocities", "torques",
+                                                             "stick_frames", "latent_tube", "convergence")}
     assert all(p.parent == tmp_path / "plots" for p in paths)
-    figure = {"joint_angles": "joint_curves", "torques": "torques", "stick_frames": "stick_frames",
-              "latent_tube": "latent_tube"}
-    for p in paths:
-        check_png(p, figure[p.stem], rows=2)  # rows: initial and optimised stick frames
+    if fmt == "png":
+        figure = {"joint_angles": "joint_curves", "joint_velocities": "velocities", "torques": "torques",
+                  "stick_frames": "stick_frames", "latent_tube": "latent_tube", "convergence": "convergence"}
+        for p in paths:
+            check_png(p, figure[p.stem], rows=2)  # rows: initial and optimised stick frames
+    figs = plots.solution_figures(r)
+    assert np.allclose(limit_lines(figs["joint_angles"].axes[0]),
+                       np.degrees([model.lowerPositionLimit[0], model.upperPositionLimit[0]]))
+    assert limit_lines(figs["torques"].axes[0]) == [] and limit_lines(figs["joint_velocities"].axes[0]) == []
 
 
 @pytest.mark.slow  # the humanoid's frames and animation
 def test_plot_solution_jump_format(tmp_path):
-    """A broad-jump result (actuated tau, one wrench per foot, touchdown, heel offset): contact
-    forces and landing balance are derived; a static pose has its ZMP at the COM."""
+    """A broad-jump result (actuated tau, one wrench per foot, touchdown, heel offset, no v limits): the
+    contact figures are derived; the training jump at its own frame rate gives the stick frames' ghost."""
     from latentoc.human_models import broad_jump_training_motion, build_cmu_humanoid
 
     model = build_cmu_humanoid()
@@ -182,20 +336,13 @@ def test_plot_solution_jump_format(tmp_path):
     wrench = np.zeros((n, 6))
     wrench[:, 2] = 300.0
     traj = {"t": t, "q": Q, "tau": np.zeros((n, model.nv - 6)), "wrench": wrench, "contact": np.ones(n, np.int8),
-            "touchdown": np.float64(t[n // 2]), "heel_offset": np.array([-0.05, 0.0, 0.0]),
-            "tau_min": -np.ones(model.nv - 6), "tau_max": np.ones(model.nv - 6),
-            "q_initial": Qj}  # the training jump at its own frame rate: stick frames only
+            "touchdown": np.float64(t[n // 2]), "settle": np.float64(t[-3]), "heel_offset": np.array([-0.05, 0.0, 0.0]),
+            "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
+            "friction": np.float64(0.4), "tau_min": -np.ones(model.nv - 6), "tau_max": np.ones(model.nv - 6),
+            "q_initial": Qj}
     make_result(model, n, tube=None, trajectory=traj).save(tmp_path)
     paths = {p.name: p for p in plots.plot_solution(tmp_path, gif=True)}
-    assert set(paths) == {"joint_angles.png", "torques.png", "stick_frames.png", "contact_forces.png", "zmp_com.png",
-                          "motion.gif"}
+    assert set(paths) == {"joint_angles.png", "joint_velocities.png", "torques.png", "stick_frames.png",
+                          "contact_forces.png", "contact_margins.png", "zmp_com.png", "motion.gif"}
     check_png(paths["stick_frames.png"], "stick_frames", rows=2)
-    with Image.open(paths["motion.gif"]) as im:
-        assert im.n_frames == int(round(15 * (t[-1] - t[0]))) + 1  # 15 fps, both ends
-    full = {**traj, "v": np.zeros((n, model.nv)), "a": np.zeros((n, model.nv))}
-    zmp, com, poly, tz = plots._landing_balance(model, full)
-    assert len(zmp) == len(com) == len(tz) == np.sum(t >= t[n // 2])
-    assert np.allclose(zmp, com[:, :2], atol=1e-9)  # static: ZMP = ground projection of the COM
-    data = model.createData()
-    assert np.allclose(com[-1], pin.centerOfMass(model, data, Q[-1]))
-    assert poly.shape == (4, 2) and np.allclose(poly[0, 1], -poly[3, 1])
+    check_png(paths["contact_margins.png"], "contact_margins")

@@ -1,0 +1,182 @@
+"""The broad jump's contact constraints over time, from the result schema alone.
+
+From ``trajectory.npz`` (t, q, v, a, the per-foot toe-tip ``wrench``, ``contact``, ``touchdown``,
+``settle``, ``heel_offset``, ``contact_frames``, ``friction``, optionally ``point_forces``)
+:func:`contact_series` computes with numeric Pinocchio what the solver held: the normal force, the
+friction ratio against mu (the cone), the centre of pressure inside the foot (heel to toe tip),
+the ZMP (from the centroidal momentum rate) and the ground-projected COM inside the support
+polygon of both feet (heel and toe tip of each), with the windows where each is enforced (ZMP:
+landing; COM: once settled). A margin is the distance inside its region (negative: outside).
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from matplotlib.figure import Figure
+from scipy.spatial import ConvexHull
+
+from .figure import LIMIT_STYLE, new_figure, panel_axes
+
+__all__ = ["contact_series", "polygon_margin", "plot_contact_forces", "plot_contact_margins", "plot_zmp_com"]
+
+
+def polygon_margin(polygon: np.ndarray, p: np.ndarray) -> float:
+    """Distance of point p (x, y) inside the convex polygon (k, 2), negative outside."""
+    V = np.asarray(polygon, dtype=float)[ConvexHull(polygon).vertices]  # counter-clockwise
+    E = np.roll(V, -1, axis=0) - V
+    n = np.column_stack([E[:, 1], -E[:, 0]]) / np.linalg.norm(E, axis=1, keepdims=True)  # outward normals
+    return float(-np.max(np.sum(n * (np.asarray(p, dtype=float)[:2] - V), axis=1)))
+
+
+def _feet(model: pin.Model, data: pin.Data, frames: list[str], heel_offset: np.ndarray) -> np.ndarray:
+    """World (heel, toe tip) of the left then the right foot (4, 3) after framesForwardKinematics."""
+    out = []
+    for foot, toe in ((frames[0], frames[2]), (frames[3], frames[5])):
+        M = data.oMf[model.getFrameId(foot)]
+        out += [M.translation + M.rotation @ heel_offset, data.oMf[model.getFrameId(toe)].translation.copy()]
+    return np.array(out)
+
+
+def contact_series(model: pin.Model, traj: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """Per sample (NaN where it does not apply): ``normal`` (N, per foot), ``friction_ratio``
+    (|f_xy| / f_z), ``point_ratio`` (n, 3: heel, ball, toe |f_x| / f_z), ``cop_margin`` (m),
+    ``zmp`` (n, 2), ``com`` (n, 3), ``zmp_margin``, ``com_margin`` (m), ``polygon`` (n, 4, 2: both
+    feet's heel and toe tip), and the masks ``contact``, ``zmp_enforced``, ``com_enforced``."""
+    t, Q, V, A = (np.asarray(traj[k], dtype=float) for k in ("t", "q", "v", "a"))
+    W = np.asarray(traj["wrench"], dtype=float)
+    contact = np.asarray(traj["contact"]).astype(bool)
+    frames = [str(f) for f in np.asarray(traj["contact_frames"])]
+    heel_offset = np.asarray(traj["heel_offset"], dtype=float)
+    n = len(t)
+    data = model.createData()
+    mass = sum(i.mass for i in model.inertias)
+    g = float(-model.gravity.linear[2])
+    nan = np.full(n, np.nan)
+    out = {"normal": nan.copy(), "friction_ratio": nan.copy(), "cop_margin": nan.copy(), "zmp_margin": nan.copy(),
+           "com_margin": nan.copy(), "zmp": np.full((n, 2), np.nan), "com": np.zeros((n, 3)),
+           "polygon": np.zeros((n, 4, 2)), "point_ratio": np.full((n, 3), np.nan)}
+    for i in range(n):
+        pin.framesForwardKinematics(model, data, Q[i])
+        feet = _feet(model, data, frames, heel_offset)
+        out["polygon"][i] = feet[[0, 1, 3, 2], :2]  # left heel, left toe, right toe, right heel
+        c = pin.centerOfMass(model, data, Q[i])
+        out["com"][i] = c
+        if not contact[i]:
+            continue
+        fx, fy, fz, _, my, _ = W[i]
+        out["normal"][i] = fz
+        if fz > 0:
+            out["friction_ratio"][i] = np.hypot(fx, fy) / fz
+            cop = feet[1, 0] - my / fz  # the wrench acts at the toe tip: my = -(cop - toe) fz
+            out["cop_margin"][i] = min(cop - feet[0, 0], feet[1, 0] - cop)
+        dh = pin.computeCentroidalMomentumTimeVariation(model, data, Q[i], V[i], A[i]).vector
+        fz_total = dh[2] + mass * g  # the ZMP on z = 0 (Kajita et al. 2014, Sect. 3.3)
+        out["zmp"][i] = (c[0] - (c[2] * dh[0] + dh[4]) / fz_total, c[1] - (c[2] * dh[1] - dh[3]) / fz_total)
+        out["zmp_margin"][i] = polygon_margin(out["polygon"][i], out["zmp"][i])
+        out["com_margin"][i] = polygon_margin(out["polygon"][i], c)
+    if "point_forces" in traj:
+        F = np.asarray(traj["point_forces"], dtype=float)  # (n, 3, 2): (f_x, f_z) of heel, ball, toe
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out["point_ratio"] = np.where(contact[:, None] & (F[:, :, 1] > 0), np.abs(F[:, :, 0]) / F[:, :, 1], np.nan)
+    out["contact"] = contact
+    out["zmp_enforced"] = contact & (t >= float(traj["touchdown"]) - 1e-9)
+    out["com_enforced"] = contact & (t >= float(traj.get("settle", traj["touchdown"])) - 1e-9)
+    return out
+
+
+def _shade(ax: Any, t: np.ndarray, mask: np.ndarray, label: str | None) -> None:
+    """Shade the time spans where ``mask`` holds."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    for k, (a, b) in enumerate(zip(edges[::2], edges[1::2])):
+        ax.axvspan(t[a], t[b - 1], color="0.85", zorder=0, label=label if k == 0 else None)
+
+
+def plot_contact_forces(t: np.ndarray, wrench: np.ndarray, contact: np.ndarray,
+                        point_forces: np.ndarray | None = None, axes: Any = None) -> Figure:
+    """Each foot's contact force at the toe tip (world frame): normal f_z and tangential f_x, and
+    with ``point_forces`` (n, 3, 2) the heel, ball and toe normal forces."""
+    fig, (ax1, ax2) = panel_axes(axes, "contact_forces", 2, ncols=1)
+    t, W = np.asarray(t, dtype=float), np.asarray(wrench, dtype=float)
+    on = np.asarray(contact).astype(bool)
+    ax1.plot(t, np.where(on, W[:, 2], np.nan), "k-", lw=1.8, label="each foot")
+    if point_forces is not None:
+        F = np.asarray(point_forces, dtype=float)
+        for k, name in enumerate(("heel", "ball", "toe")):
+            ax1.plot(t, np.where(on, F[:, k, 1], np.nan), lw=1, label=name)
+    ax1.axhline(0.0, label="limit $f_z \\geq 0$", **LIMIT_STYLE)
+    ax2.plot(t, np.where(on, W[:, 0], np.nan), "k-", lw=1.5, label="$f_x$")
+    ax2.plot(t, np.where(on, W[:, 1], np.nan), "-", color="C2", lw=1, label="$f_y$")
+    ax1.set_ylabel("normal force $f_z$ [N]")
+    ax2.set_ylabel("tangential force [N]")
+    ax2.set_xlabel("t [s]")
+    ax1.legend(fontsize=7, ncol=2)
+    ax2.legend(fontsize=7)
+    if axes is None:
+        fig.subplots_adjust(left=0.1, right=0.97, bottom=0.09, top=0.97, hspace=0.12)
+    return fig
+
+
+def plot_contact_margins(t: np.ndarray, series: Mapping[str, np.ndarray], friction: float,
+                         axes: Any = None) -> Figure:
+    """Over time, against their limits (dotted red): the friction ratio and mu (the cone), the
+    centre of pressure, ZMP and COM margins (>= 0 where enforced, shaded)."""
+    fig, panels = panel_axes(axes, "contact_margins", 4, ncols=1)
+    t = np.asarray(t, dtype=float)
+    ax = panels[0]
+    ax.plot(t, series["friction_ratio"], "k-", lw=1.5, label="$|f_{xy}| / f_z$, each foot")
+    for k, name in enumerate(("heel", "ball", "toe")):
+        ax.plot(t, series["point_ratio"][:, k], lw=0.8, label=name)
+    ax.axhline(friction, label=f"friction cone $\\mu$ = {friction:g}", **LIMIT_STYLE)
+    ax.set_ylabel("friction ratio")
+    rows = (("cop_margin", "contact", "centre of pressure\nin the foot [m]"),
+            ("zmp_margin", "zmp_enforced", "ZMP in the support\npolygon [m]"),
+            ("com_margin", "com_enforced", "COM in the support\npolygon [m]"))
+    for ax, (key, window, label) in zip(panels[1:], rows):
+        _shade(ax, t, np.asarray(series[window], dtype=bool), "enforced")
+        ax.plot(t, np.where(series["contact"], series[key], np.nan), "k-", lw=1.5, label="margin")
+        ax.axhline(0.0, label="limit", **LIMIT_STYLE)
+        ax.set_ylabel(label, fontsize=8)
+    for ax in panels:
+        ax.legend(fontsize=7, ncol=3, loc="best")
+        ax.tick_params(labelsize=7)
+    panels[-1].set_xlabel("t [s]")
+    if axes is None:
+        fig.subplots_adjust(left=0.12, right=0.97, bottom=0.06, top=0.98, hspace=0.15)
+    return fig
+
+
+def plot_zmp_com(zmp: np.ndarray, com: np.ndarray, polygon: np.ndarray, t: np.ndarray | None = None,
+                 axes: Any = None) -> Figure:
+    """ZMP and ground-projected COM against the support polygon (k, 2) (Eq. 35-36). Left: top
+    view (x, y); right: x against time (or sample) with the polygon's x extent shaded."""
+    zmp, com = np.atleast_2d(zmp)[:, :2], np.atleast_2d(com)[:, :2]
+    poly = np.asarray(polygon, dtype=float)[:, :2]
+    if axes is None:
+        fig = new_figure("zmp_com")
+        ax, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
+    else:
+        fig, (ax, ax2) = panel_axes(axes, "zmp_com", 2)
+    closed = np.vstack([poly, poly[:1]])
+    ax.fill(closed[:, 0], closed[:, 1], color="lightgrey", alpha=0.6, label="support polygon")
+    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=1)
+    ax.plot(zmp[:, 0], zmp[:, 1], "r.-", ms=3, lw=1, label="ZMP")
+    ax.plot(com[:, 0], com[:, 1], "b.-", ms=3, lw=1, label="COM (ground projection)")
+    ax.plot(com[-1, 0], com[-1, 1], "bs", label="COM at end")
+    ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]")
+    ax.set_aspect("equal", "datalim")
+    ax.legend(fontsize=7)
+    ax.set_title("top view", fontsize=9)
+    s = np.arange(len(zmp)) if t is None else np.asarray(t, dtype=float)
+    ax2.axhspan(poly[:, 0].min(), poly[:, 0].max(), color="lightgrey", alpha=0.6, label="support polygon (x)")
+    ax2.plot(s, zmp[:, 0], "r-", label="ZMP x")
+    ax2.plot(s, com[:, 0], "b-", label="COM x")
+    ax2.set_xlabel("t [s]" if t is not None else "sample")
+    ax2.set_ylabel("x [m]")
+    ax2.legend(fontsize=7)
+    ax2.set_title("forward direction", fontsize=9)
+    if axes is None:
+        fig.subplots_adjust(left=0.07, right=0.98, bottom=0.11, top=0.93, wspace=0.22)
+    return fig
