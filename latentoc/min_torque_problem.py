@@ -46,6 +46,7 @@ from .problem_inputs import check_problem_files, problem_demonstration, require_
 from .results import convergence_entry
 from .robots import ROBOT, describe_robot
 from .schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
+from .sizes import check_memory, spline_transcription_bytes
 from .solve import SOLVERS, Solution, resolve_tube
 from .spline_path import SplinePath, fixed_rows, trapezoid_cost
 
@@ -128,7 +129,8 @@ SCHEMA = Schema("latent-min-torque", (
 
 def check_problem(problem: Problem, where: str) -> None:
     """Checks across settings: enough control points for the degree and the boundary, a goal's
-    position with its frame, and the files the robot and the training motion name."""
+    position with its frame, the files the robot and the training motion name, and sizes that
+    fit in memory (:mod:`latentoc.sizes`)."""
     if (problem.goal_frame is None) != (problem.goal_position is None):
         raise ProblemError(f"{where}: [goal] needs both 'goal.frame' and 'goal.position'")
     check_problem_files(problem, where)
@@ -139,6 +141,10 @@ def check_problem(problem: Problem, where: str) -> None:
     if m <= n_fixed:
         raise ProblemError(f"{where}: key 'latent.control_points' = {m}: boundary \"{problem.boundary}\" fixes "
                            f"{n_fixed}, so at least {n_fixed + 1} are needed to leave one free")
+    check_memory(spline_transcription_bytes(m, k, problem.quadrature_points, problem.constraint_points,
+                                            problem.duration, problem.latent_dim),
+                 {"latent.control_points": m, "transcription.constraint_points": problem.constraint_points,
+                  "duration": problem.duration}, where)
 
 
 def training_motion(problem: Problem, demo: Demonstration | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -304,15 +310,14 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
         return _solve_joint_range(problem, demo, sym, settings, joint_range_deg, verbose)
 
     t_train, Q_train = training_motion(problem, demo)
-    d = problem.latent_dim if gpdm is None else gpdm.latent_dim
+    d = problem.latent_dim
     if not 1 <= d < Q_train.shape[1]:
         raise SolveError(f"latent dimension d = {d} must satisfy 1 <= d < D = {Q_train.shape[1]} "
                          "(the training data's dimension)")
     if gpdm is None:
         check_frames(demo, d, problem.gpdm["training_stride"])
-    if gpdm is not None and gpdm.X.shape[0] != len(t_train):
-        raise SolveError(f"the given GPDM has {gpdm.X.shape[0]} latent points, the problem's training motion "
-                         f"has {len(t_train)} frames")
+    else:
+        _check_given_gpdm(gpdm, problem, demo, Q_train)
     t0 = time.perf_counter()
     gp = problem_gpdm(problem)[0] if gpdm is None else gpdm
     gpdm_time = time.perf_counter() - t0
@@ -368,6 +373,25 @@ def solve_latent_min_torque(problem: Problem, *, method: str = "latent", joint_r
                   "model": np.str_(robot.saveToString()), **_limit_arrays(nlp)}
     return Solution(result=result, trajectory=trajectory, warm={"P": P, "tube": delta} if res.success else None,
                     gpdm=gp)
+
+
+def _check_given_gpdm(gpdm: GPDM, problem: Problem, demo: Demonstration, Q_train: np.ndarray) -> None:
+    """A SolveError unless the given GPDM is one of this problem's training motion: its joints,
+    latent dimension and training frames (the data it was learned from)."""
+    D = gpdm.Y.shape[1] if np.ndim(gpdm.Y) == 2 else -1
+    if D != Q_train.shape[1]:
+        raise SolveError(f"the given GPDM models {D} joints; problem {problem.name!r} moves {Q_train.shape[1]} "
+                         f"({', '.join(demo.joint_names)}): a GPDM of another robot or motion")
+    if gpdm.latent_dim != problem.latent_dim:
+        raise SolveError(f"the given GPDM has latent dimension {gpdm.latent_dim}; problem {problem.name!r} has "
+                         f"latent.dim = {problem.latent_dim} (set it to {gpdm.latent_dim}: --latent-dim)")
+    if gpdm.Y.shape[0] != len(Q_train):
+        raise SolveError(f"the given GPDM has {gpdm.Y.shape[0]} latent points, the problem's training motion "
+                         f"has {len(Q_train)} frames (gpdm.training_stride = {problem.gpdm['training_stride']})")
+    if not np.allclose(gpdm.Y, Q_train, rtol=0.0, atol=1e-9):
+        worst = float(np.max(np.abs(gpdm.Y - Q_train)))
+        raise SolveError(f"the given GPDM was learned from other data than problem {problem.name!r}'s training "
+                         f"motion (its frames differ by up to {worst:.3g} rad or m)")
 
 
 def _solve_joint_range(problem: Problem, demo: Demonstration, sym: SymbolicModel, settings: MinTorqueSettings,

@@ -16,7 +16,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import LatentocError
+from .files import NPZ_ERRORS
 
 __all__ = ["MotionFileError", "RawMotion", "read_csv", "read_npz", "read_amc_motion", "read_raw_motion",
            "FORMATS"]
@@ -97,10 +97,16 @@ def read_csv(path: Path) -> RawMotion:
 def read_npz(path: Path) -> RawMotion:
     """An NPZ file with ``t``, ``q`` and optionally ``joint_names`` (module doc)."""
     try:
-        with np.load(path, allow_pickle=False) as f:
-            arrays = {k: f[k] for k in f.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise MotionFileError(f"{path}: not a readable NPZ file ({exc})") from None
+        loaded = np.load(path, allow_pickle=False)
+        single = not isinstance(loaded, np.lib.npyio.NpzFile)  # a .npy array under an .npz name
+        if not single:
+            with loaded as f:
+                arrays = {k: f[k] for k in f.files}
+    except NPZ_ERRORS as exc:
+        raise MotionFileError(f"{path}: not a readable NPZ file ({type(exc).__name__}: {exc})") from None
+    if single:
+        raise MotionFileError(f"{path}: a single array (.npy), not an NPZ archive of t, q and joint_names "
+                              "(numpy.savez writes one)")
     for key in ("t", "q"):
         if key not in arrays:
             raise MotionFileError(f"{path}: no array {key!r}; an NPZ motion has t (N), q (N x nq) and optionally "

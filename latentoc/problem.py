@@ -28,7 +28,7 @@ from .paths import data_dir
 from .schema import Check, Schema
 
 __all__ = ["Problem", "ProblemError", "load_problem", "problem_names", "problems_dir", "KIND_MODULES",
-           "kind_schema", "parse_tube", "describe_problem", "TUBE"]
+           "kind_schema", "parse_tube", "describe_problem", "TUBE", "check_name"]
 
 #: problem kind -> the module declaring its ``SCHEMA`` and registering its solver
 KIND_MODULES: dict[str, str] = {"latent-min-torque": "latentoc.min_torque_problem",
@@ -61,7 +61,7 @@ class Problem:
     def replace(self, **overrides: Any) -> Problem:
         """A copy with settings changed by name (a table's, e.g. ``options``, merged), checked
         like the file's keys."""
-        name = overrides.pop("name", self.name)
+        name = check_name(overrides.pop("name", self.name), f"problem {self.name!r}: name")
         settings = self.schema.override(self.settings, overrides, f"problem {self.name!r}")
         return _checked(Problem(name=name, kind=self.kind, settings=settings, description=self.description,
                                 source=self.source), f"problem {name!r}")
@@ -79,6 +79,16 @@ class Problem:
         settings = schema.resolve(schema.checked(data["settings"], where), where)
         return _checked(cls(name=data["name"], kind=data["kind"], settings=settings,
                             description=data.get("description", ""), source=data.get("source", "")), where)
+
+
+def check_name(name: object, where: str) -> str:
+    """A problem's name as it names output folders (``out/<name>-latent``): a ProblemError unless it
+    is a plain file name: no path separator, not "." or "..", no control character, at most 200."""
+    if not isinstance(name, str) or not name or name in (".", "..") or len(name) > 200 \
+            or any(c in name for c in "/\\") or any(ord(c) < 32 or ord(c) == 127 for c in name):
+        raise ProblemError(f"{where} = {name!r} must be a plain name: it names output folders, so no '/', "
+                           "'\\', '.' or '..', no control characters, at most 200 characters")
+    return name
 
 
 def _checked(problem: Problem, where: str) -> Problem:
@@ -158,13 +168,19 @@ def load_problem(name_or_path: str | Path, **overrides: Any) -> Problem:
     ``options={"friction": 0.5}``), checked the same way."""
     path = _resolve(name_or_path)
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise ProblemError(f"{path}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ProblemError(f"{path}: not UTF-8 text, as TOML must be ({exc})") from None
+    except OSError as exc:
+        raise ProblemError(f"{path}: cannot be read: {exc}") from None
     where = str(path)
     for key in _COMMON:
         if key in data and not (isinstance(data[key], str) and (data[key] or key == "description")):
             raise ProblemError(f"{where}: key '{key}' must be a non-empty string, got {data[key]!r}")
+    if "name" in data:
+        check_name(data["name"], f"{where}: key 'name'")
     if "kind" not in data:
         raise ProblemError(f"{where}: missing key 'kind'; known kinds: {', '.join(sorted(KIND_MODULES))}")
     if data["kind"] not in KIND_MODULES:
