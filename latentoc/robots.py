@@ -32,7 +32,7 @@ from .errors import LatentocError
 from .robot_checks import check_urdf
 from .schema import Check
 
-__all__ = ["load_robot", "robot_names", "example_robot_data_dir", "UnknownRobotError", "RobotFileError", "ROBOT",
+__all__ = ["load_robot", "robot_names", "robot_urdf", "example_robot_data_dir", "UnknownRobotError", "RobotFileError", "ROBOT",
            "load_urdf", "robot_from_setting", "robot_files", "describe_robot", "continuous_as_revolute"]
 
 
@@ -115,6 +115,16 @@ def example_robot_data_dir() -> Path:
         "example-robot-data's robots folder was not found in site-packages; install it with "
         "`pip install example-robot-data`"
     )
+
+
+def robot_urdf(name: str) -> Path | None:
+    """The URDF of an example-robot-data robot name (its meshes are ``package://example-robot-data/...``
+    under :func:`example_robot_data_dir`'s grandparent); None for latentoc's own models."""
+    if name in _OWN_ROBOTS:
+        return None
+    if name not in _EXAMPLE_ROBOTS:
+        raise UnknownRobotError(f"unknown robot {name!r}; known robots: {', '.join(robot_names())}")
+    return example_robot_data_dir() / _EXAMPLE_ROBOTS[name].path
 
 
 def load_robot(name: str, free_flyer: bool | None = None) -> pinocchio.Model:
