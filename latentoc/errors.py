@@ -8,6 +8,7 @@ The tree (the domain errors live beside the code that raises them)::
     ├── ProblemError        a problem file or override (latentoc.problem)
     ├── SolveError          a solve's arguments, or a provably infeasible tube (latentoc.solve)
     ├── ResultFileError     a result folder that cannot be read (latentoc.results)
+    ├── OutputError         an output folder that cannot be written (latentoc.files)
     ├── SweepError          a sweep's tubes, workers or failed tasks (latentoc.sweep)
     ├── GPDMInputError      training data or GPDM settings (latentoc.gpdm)
     ├── MocapFormatError    a malformed ASF/AMC file (latentoc.mocap)
