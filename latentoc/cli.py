@@ -289,6 +289,8 @@ def _cmd_start_poses(args: argparse.Namespace) -> int:
     from .start_poses import start_pose_distances
 
     problem = load_problem(args.problem, **_overrides(args, "latent_dim"))
+    if args.out is not None:
+        check_out_dir(args.out)
     if problem.kind != "latent-min-torque":
         raise LatentocError(f"start-poses is for latent-min-torque problems (Sect. 4.1.4), {problem.name!r} is "
                             f"a {problem.kind} problem")
@@ -317,6 +319,9 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import report, reproduce
     from .results import atomic_write
 
+    if args.out.is_dir():
+        raise LatentocError(f"--out {args.out} is a folder; reproduce writes a Markdown file")
+    check_out_dir(args.out.parent, "--out's folder")
     text = report(reproduce(quick=args.quick, budgets=args.budgets))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out, lambda f: f.write(text))
