@@ -1,4 +1,4 @@
-"""Command line: ``python -m latentoc {list,show,learn,solve,sweep,start-poses,reproduce,bench} ...``.
+"""Command line: ``python -m latentoc {list,show,learn,solve,plot,view,sweep,start-poses,reproduce,bench} ...``.
 
 Input errors (:class:`latentoc.LatentocError`: bad problem, infeasible tube, an ``--out`` that
 cannot be written, ...) print ``latentoc: error: <message>`` and exit with code 2 without
@@ -71,8 +71,14 @@ def _parser() -> argparse.ArgumentParser:
     pl.add_argument("--out", type=Path, default=None, help="output folder (default: RESULT/plots)")
     pl.add_argument("--no-gif", action="store_true", help="no motion.gif")
 
-    ls = sub.add_parser("list", help="list the packaged problems")
+    vw = sub.add_parser("view", help="the 3-D view of a result: one self-contained HTML page with the animation")
+    vw.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz)")
+    vw.add_argument("--html", type=Path, default=None, help="the page to write (default: RESULT/view.html)")
+    vw.add_argument("--rate", type=float, default=50.0, help="animation frames per second of motion time (default 50)")
+
+    ls = sub.add_parser("list", help="list the packaged problems (or, with --robots, the robot names)")
     ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
+    ls.add_argument("--robots", action="store_true", help="the robot names a problem's `robot` or `learn --robot` takes")
     sh = sub.add_parser("show", help="a problem's resolved settings, one key per line")
     sh.add_argument("problem")
 
@@ -149,8 +155,22 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    from .viewer import write_html
+
+    if not args.rate > 0:
+        raise LatentocError(f"--rate must be positive, got {args.rate}")
+    path = write_html(args.result, args.html, rate_hz=args.rate)
+    print(f"wrote {path} (open it in a browser; no server needed)")
+    return 0
+
+
 def _cmd_list(args: argparse.Namespace) -> int:
     from .problem import describe_problem, load_problem, problem_names
+    if args.robots:
+        from .robots import robot_names
+        print("\n".join(robot_names()))
+        return 0
     for name in problem_names():
         problem = load_problem(name)
         print(describe_problem(problem) + "\n" if args.verbose else f"{name:24s} {problem.description}")
@@ -346,7 +366,7 @@ def main(argv: list[str] | None = None) -> int:
 
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
-    commands = {"plot": _cmd_plot, "list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
+    commands = {"plot": _cmd_plot, "view": _cmd_view, "list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
                 "reproduce": _cmd_reproduce,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:
