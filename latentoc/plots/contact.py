@@ -131,14 +131,25 @@ def plot_contact_margins(t: np.ndarray, series: Mapping[str, np.ndarray], fricti
         ax.plot(t, series["point_ratio"][:, k], lw=0.8, label=name)
     ax.axhline(friction, label=f"friction cone $\\mu$ = {friction:g}", **LIMIT_STYLE)
     ax.set_ylabel("friction ratio")
+    ratios = np.concatenate([np.ravel(series["friction_ratio"]), np.ravel(series["point_ratio"])])
+    top = float(np.nanmax(ratios)) if np.isfinite(ratios).any() else friction
+    ax.set_ylim(0.0, min(max(2.0 * friction, 1.1 * top), 4.0 * friction))  # a spike where f_z -> 0 stays readable
     rows = (("cop_margin", "contact", "centre of pressure\nin the foot [m]"),
             ("zmp_margin", "zmp_enforced", "ZMP in the support\npolygon [m]"),
             ("com_margin", "com_enforced", "COM in the support\npolygon [m]"))
     for ax, (key, window, label) in zip(panels[1:], rows):
-        _shade(ax, t, np.asarray(series[window], dtype=bool), "enforced")
-        ax.plot(t, np.where(series["contact"], series[key], np.nan), "k-", lw=1.5, label="margin")
+        enforced = np.asarray(series[window], dtype=bool)
+        values = np.where(series["contact"], series[key], np.nan)
+        _shade(ax, t, enforced, "enforced")
+        ax.plot(t, np.where(enforced, np.nan, values), "-", color="0.6", lw=1, label="not enforced")
+        ax.plot(t, np.where(enforced, values, np.nan), "k-", lw=1.5, label="margin")
         ax.axhline(0.0, label="limit", **LIMIT_STYLE)
         ax.set_ylabel(label, fontsize=8)
+        shown = values[enforced] if np.isfinite(values[enforced]).any() else values  # the y range of what is held
+        if np.isfinite(shown).any():
+            lo, hi = min(float(np.nanmin(shown)), 0.0), max(float(np.nanmax(shown)), 0.0)
+            pad = 0.15 * (hi - lo) + 1e-4
+            ax.set_ylim(lo - pad, hi + pad)
     for ax in panels:
         ax.legend(fontsize=7, ncol=3, loc="best")
         ax.tick_params(labelsize=7)

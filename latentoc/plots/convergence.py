@@ -19,8 +19,9 @@ __all__ = ["plot_convergence", "run_label"]
 
 def run_label(entry: Mapping[str, Any], runs: int) -> str:
     """A run's name in the figure: its phase, and its round when there are several."""
-    same_phase = runs > 1
-    return f"{entry['phase']}" + (f", round {entry['round']}" if same_phase else "")
+    phase = str(entry["phase"])
+    name = f"phase {phase}" if phase.isdigit() else phase
+    return name + (f", round {entry['round']}" if runs > 1 else "")
 
 
 def plot_convergence(convergence: Sequence[Mapping[str, Any]], title: str | None = None,
