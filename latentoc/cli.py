@@ -76,6 +76,10 @@ def _parser() -> argparse.ArgumentParser:
     vw.add_argument("--html", type=Path, default=None, help="the page to write (default: RESULT/view.html)")
     vw.add_argument("--rate", type=float, default=50.0, help="animation frames per second of motion time (default 50)")
 
+    nbk = sub.add_parser("notebooks", help="run the notebooks in place: their committed outputs, and what made them")
+    nbk.add_argument("names", nargs="*", help="notebooks by name or number (default: all)")
+    nbk.add_argument("--stale", action="store_true", help="only those whose code or inputs changed since their run")
+
     ls = sub.add_parser("list", help="list the packaged problems (or, with --robots, the robot names)")
     ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
     ls.add_argument("--robots", action="store_true", help="the robot names a problem's `robot` or `learn --robot` takes")
@@ -162,6 +166,20 @@ def _cmd_view(args: argparse.Namespace) -> int:
         raise LatentocError(f"--rate must be positive, got {args.rate}")
     path = write_html(args.result, args.html, rate_hz=args.rate)
     print(f"wrote {path} (open it in a browser; no server needed)")
+    return 0
+
+
+def _cmd_notebooks(args: argparse.Namespace) -> int:
+    import time
+
+    from .notebooks import check, notebook_paths, run_notebook
+
+    for path in notebook_paths(args.names):
+        if args.stale and not check(path):
+            continue
+        t0 = time.perf_counter()
+        meta = run_notebook(path)
+        print(f"ran {path} in {time.perf_counter() - t0:.0f} s ({len(meta['inputs'])} inputs recorded)", flush=True)
     return 0
 
 
@@ -366,7 +384,7 @@ def main(argv: list[str] | None = None) -> int:
 
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
-    commands = {"plot": _cmd_plot, "view": _cmd_view, "list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
+    commands = {"plot": _cmd_plot, "view": _cmd_view, "notebooks": _cmd_notebooks, "list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
                 "reproduce": _cmd_reproduce,
                 "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:

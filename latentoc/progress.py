@@ -8,7 +8,9 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from typing import TypeVar
 
-from tqdm.auto import tqdm
+# tqdm.std, not tqdm.auto: in Jupyter auto picks the widget bar, which needs ipywidgets ("IProgress not
+# found") and stores widget state in the notebook; the text bar works in a terminal and in Jupyter alike
+from tqdm.std import tqdm
 
 __all__ = ["bar", "quiet", "set_quiet", "status"]
 
