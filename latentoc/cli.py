@@ -109,6 +109,8 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("reproduce", help="the paper's Tables 2, 3, 4, 6 and Fig. 5, ours beside the paper's")
     r.add_argument("--quick", action="store_true", help="the arm's tables and Fig. 5 only (no OMPL, no jump)")
+    r.add_argument("--figures", action="store_true",
+                   help="instead of the tables: the README's figures in docs/images (latentoc/readme_figures.py)")
     r.add_argument("--budgets", nargs="*", type=float, default=[10.0, 60.0, 300.0],
                    help="the sampling baseline's cumulative wall budgets, s")
     r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md")
@@ -356,6 +358,12 @@ def _cmd_start_poses(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import report, reproduce
     from .results import atomic_write
+
+    if args.figures:
+        from .readme_figures import make_figures
+
+        print("wrote " + ", ".join(str(p) for p in make_figures()))
+        return 0
 
     if args.out.is_dir():
         raise LatentocError(f"--out {args.out} is a folder; reproduce writes a Markdown file")

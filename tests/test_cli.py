@@ -114,6 +114,15 @@ def test_solve_plots_writes_png_figures_of_the_solution(tmp_path, capsys):
     assert "plots: " in capsys.readouterr().out
 
 
+def test_list_robots_prints_every_robot_name(capsys):
+    from latentoc.robots import load_robot, robot_names
+
+    assert main(["list", "--robots"]) == 0
+    names = capsys.readouterr().out.split()
+    assert names == robot_names() and {"panda", "human-arm", "cmu-humanoid"} <= set(names)
+    assert load_robot(names[-1]).nv > 0  # a name it lists loads
+
+
 def test_plot_writes_every_figure_of_a_result_folder(tmp_path, capsys):
     """`plot RESULT --format pdf --out DIR`: the figures from the folder's files alone; a folder
     without result.json is an input error."""
