@@ -222,8 +222,8 @@ def no_worse_than_start(r: Result, start: Result, solve_cold: Callable[[], Resul
         r = cold if (cold.success, cold.gain_pct) > (warm.success, warm.gain_pct) else warm
         r.details["sweep_start"] = {
             "start": str(start.tube.spec if start.tube is not None else start.problem), "start_cost": start.cost,
-            "warm_cost": warm.cost, "warm_status": warm.status, "cold_cost": cold.cost, "cold_status": cold.status,
-            "kept": "cold" if r is cold else "warm"}
+            "warm_cost": warm.cost, "warm_status": warm.status, "warm_success": warm.success,
+            "cold_cost": cold.cost, "cold_status": cold.status, "kept": "cold" if r is cold else "warm"}
     if r.success and _worse(r, start):
         r.success = False
         r.details["rejected"] = (f"cost {r.cost:.6g} is worse than {start.cost:.6g}, the optimum of the smaller "
@@ -234,9 +234,9 @@ def no_worse_than_start(r: Result, start: Result, solve_cold: Callable[[], Resul
 
 def _start_note(r: Result) -> str:
     s = r.details["sweep_start"]
-    return (f"the warm start from {s['start']} ended {s['warm_status']} at cost {s['warm_cost']:.6g}, worse than "
-            f"its start's {s['start_cost']:.6g}: solved cold ({s['cold_status']}, cost {s['cold_cost']:.6g}), "
-            f"kept the {s['kept']} solve")
+    why = f"worse than its start's {s['start_cost']:.6g}" if s.get("warm_success", True) else "not a success"
+    return (f"the warm start from {s['start']} ended {s['warm_status']} at cost {s['warm_cost']:.6g}, {why}: "
+            f"solved cold ({s['cold_status']}, cost {s['cold_cost']:.6g}), kept the {s['kept']} solve")
 
 
 def _distributed(executor: Any, tasks: list[SweepTask], out: str | Path | None, say: Callable[[str], None],
@@ -282,10 +282,10 @@ def summary_row(r: Result) -> dict[str, Any]:
 
 
 def _start(r: Result) -> str:
-    """Where the kept solve started: "cold", "warm", or "cold, warm ended worse" (sweep_start)."""
+    """Where the kept solve started: "cold", "warm", or which of both (sweep_start)."""
     s = r.details.get("sweep_start")
     if s is not None:
-        return f"{s['kept']} (the warm start ended worse than its start; both solved)"
+        return f"{s['kept']} (warm and cold solved: the warm start ended worse than its start or failed)"
     return "warm" if r.details.get("warm_start") else "cold"
 
 

@@ -31,12 +31,21 @@ def test_a_warm_start_that_ends_worse_is_solved_cold_and_the_better_kept(monkeyp
     r = outcome.results[1]
     assert r.cost == 592.0 and r.success and not outcome.unsuccessful
     assert r.details["sweep_start"] == {"start": "0.2", "start_cost": 600.0, "warm_cost": 2887.0,
-                                        "warm_status": "Solve_Succeeded", "cold_cost": 592.0,
+                                        "warm_status": "Solve_Succeeded", "warm_success": True, "cold_cost": 592.0,
                                         "cold_status": "Solve_Succeeded", "kept": "cold"}
     assert any("worse than its start's 600: solved cold" in line for line in lines)
     table = format_table(outcome.results)
     assert "ok, cold kept" in table and "0.5: the warm start from 0.2 ended" in table
     assert latentoc.load_result(tmp_path / "tube-0.5").details["sweep_start"]["kept"] == "cold"
+
+
+def test_a_failed_warm_start_is_solved_cold(monkeypatch):
+    calls = install(monkeypatch, lambda p, w: solution(p, 600.0 if p.tube == 0.2 or w is None else 500.0,
+                                                       success=p.tube == 0.2 or w is None, warm_start=w is not None))
+    lines = []
+    r = latentoc.sweep(_problem(), [0.2, 0.5], progress=lines.append).results[1]
+    assert len(calls) == 3 and r.success and r.cost == 600.0 and r.details["sweep_start"]["kept"] == "cold"
+    assert "ended Maximum_Iterations_Exceeded at cost 500, not a success: solved cold" in lines[-1]
 
 
 def test_a_warm_start_no_worse_than_its_start_is_kept(monkeypatch):
