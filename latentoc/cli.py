@@ -174,7 +174,11 @@ def _cmd_view(args: argparse.Namespace) -> int:
 def _cmd_notebooks(args: argparse.Namespace) -> int:
     import time
 
-    from .notebooks import check, notebook_paths, run_notebook
+    try:
+        from .notebooks import check, notebook_paths, run_notebook
+        import nbclient  # noqa: F401  (the dev extra's, with nbmake)
+    except ImportError:
+        raise LatentocError("running the notebooks needs nbclient: pip install -e '.[dev]'") from None
 
     for path in notebook_paths(args.names):
         if args.stale and not check(path):

@@ -37,7 +37,9 @@ def make_figures(out: str | Path = ROOT / "docs" / "images") -> list[Path]:
     """Solve, draw and write the images and their manifest into ``out`` (module doc); the paths."""
     import latentoc
 
-    from .plots import plot_convergence, plot_latent_tube, save
+    from matplotlib.figure import Figure
+
+    from .plots import DPI, plot_convergence, plot_latent_tube, save
     from .viewer import write_html
     from .viewer.still import still
 
@@ -46,10 +48,14 @@ def make_figures(out: str | Path = ROOT / "docs" / "images") -> list[Path]:
         arm = latentoc.solve(latentoc.load_problem("arm-raise"))
         traj = arm.trajectory
         assert arm.gpdm is not None and arm.tube is not None
-        tube = plot_latent_tube(arm.gpdm, arm.tube.delta, paths={"initial": traj["x_initial"], "optimised": traj["x"]},
-                                control_points={"initial control points": traj["P_initial"],
-                                                "optimised control points": traj["P"]},
-                                title=f"arm-raise: the optimised path in the tube $\\delta$ = {arm.tube.delta:.3g}")
+        tube = Figure(figsize=(9.0, 4.8), dpi=DPI)  # wide: the tube is long and thin at one scale on every axis
+        ax = tube.add_subplot(projection="3d")
+        plot_latent_tube(arm.gpdm, arm.tube.delta, paths={"initial": traj["x_initial"], "optimised": traj["x"]},
+                         control_points={"initial control points": traj["P_initial"],
+                                         "optimised control points": traj["P"]},
+                         title=f"arm-raise: the optimised path in the tube $\\delta$ = {arm.tube.delta:.3g}", axes=ax)
+        ax.set_box_aspect(tuple(ax.get_box_aspect()), zoom=1.15)
+        tube.subplots_adjust(left=0.0, right=1.0, bottom=0.0, top=0.95)
         written = [save(tube, out / IMAGES[0]),
                    save(plot_convergence(arm.convergence, title="arm-raise: Ipopt's convergence, round by round"),
                         out / IMAGES[1])]

@@ -55,3 +55,22 @@ def test_readme_arm_table_is_the_reproductions():
 
     ours = _reproduction_gains("## Table 2")
     assert dict(zip(cells(tubes), cells(gains))) == ours
+
+
+def test_readme_images_are_made_by_the_current_code():
+    """Every image the README shows is one `python -m latentoc reproduce --figures` writes, the very file
+    it wrote, from the code and data of this checkout (docs/images/figures.json, latentoc.provenance)."""
+    from latentoc.readme_figures import COMMAND, IMAGES, image_problems
+
+    readme = (ROOT / "README.md").read_text()
+    shown = set(re.findall(r"\]\(docs/images/([^)]+)\)", readme))
+    assert shown and shown <= set(IMAGES), f"README images not made by {COMMAND}: {sorted(shown - set(IMAGES))}"
+    problems = image_problems()
+    assert not problems, f"docs/images is stale: {'; '.join(problems)}. Remake it: {COMMAND}"
+
+
+def test_readme_shows_the_view_and_the_convergence():
+    readme = (ROOT / "README.md").read_text()
+    for text in ("docs/images/panda_view.png", "docs/images/arm_convergence.png", "python -m latentoc view ",
+                 "python -m latentoc plot ", "python -m latentoc list --robots", "python -m latentoc notebooks"):
+        assert text in readme, text
