@@ -186,7 +186,17 @@ def _cmd_notebooks(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         meta = run_notebook(path)
         print(f"ran {path} in {time.perf_counter() - t0:.0f} s ({len(meta['inputs'])} inputs recorded)", flush=True)
+        _warn_uncommitted(meta["inputs"])
     return 0
+
+
+def _warn_uncommitted(inputs: dict[str, str]) -> None:
+    from .provenance import uncommitted
+
+    dirty = uncommitted(inputs)
+    if dirty:
+        print(f"latentoc: warning: made from uncommitted changes to {', '.join(dirty)}: on a clean clone the "
+              "outputs are stale until those are committed as they are", file=sys.stderr)
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -366,7 +376,11 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     if args.figures:
         from .readme_figures import make_figures
 
-        print("wrote " + ", ".join(str(p) for p in make_figures()))
+        import json
+
+        written = make_figures()
+        print("wrote " + ", ".join(str(p) for p in written))
+        _warn_uncommitted(json.loads(written[-1].read_text())["inputs"])
         return 0
 
     if args.out.is_dir():

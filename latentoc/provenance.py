@@ -17,13 +17,14 @@ from __future__ import annotations
 import ast
 import hashlib
 import importlib.util
+import subprocess
 import sys
 import threading
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ROOT", "Recorder", "fingerprint", "fingerprints", "module_files", "stale", "start", "stop"]
+__all__ = ["ROOT", "Recorder", "fingerprint", "fingerprints", "module_files", "stale", "uncommitted", "start", "stop"]
 
 #: the source checkout (latentoc is installed editable from it)
 ROOT = Path(__file__).resolve().parents[1]
@@ -158,3 +159,15 @@ def stop() -> dict[str, str]:
 def stale(inputs: Mapping[str, str]) -> list[str]:
     """The inputs whose file changed or is gone since their fingerprints were taken."""
     return sorted(r for r, fp in inputs.items() if not (ROOT / r).is_file() or fingerprint(ROOT / r) != fp)
+
+
+def uncommitted(inputs: Mapping[str, str]) -> list[str]:
+    """The inputs with changes git has not committed (an output made from them is stale on a clean
+    clone until they are); empty outside a git checkout."""
+    try:
+        out = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--", *inputs], capture_output=True,
+                             text=True, timeout=60)
+    except (OSError, subprocess.SubprocessError):
+        return []
+    return sorted(line[3:].strip() for line in out.stdout.splitlines() if line[3:].strip() in inputs) \
+        if out.returncode == 0 else []

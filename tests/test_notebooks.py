@@ -40,6 +40,7 @@ def test_recorder_notes_what_ran_and_what_was_read(tmp_path):
     assert "latentoc/start_poses.py" not in rec.inputs and latentoc.start_poses
     assert all(not k.startswith(("/", "..")) for k in rec.inputs)
     assert provenance.stale(rec.inputs) == [] and provenance.stale({"latentoc/spline.py": "0" * 64}) == ["latentoc/spline.py"]
+    assert set(provenance.uncommitted(rec.inputs)) <= set(rec.inputs)
     assert provenance.module_files("%matplotlib inline\nfrom latentoc.reproduce import PAPER") == \
         {str(provenance.ROOT / "latentoc" / "reproduce.py")}
 
