@@ -291,8 +291,7 @@ def test_plot_start_poses(arm, tmp_path):
 
 
 @pytest.mark.slow  # stick frames of 50 poses and the tube mesh
-@pytest.mark.parametrize("fmt", ["png", "svg"])
-def test_plot_solution_arm(arm, gpdm3, tmp_path, fmt):
+def test_plot_solution_arm(arm, gpdm3, tmp_path, fmt="png"):
     """An arm result (latent path, training fit, its GPDM, limits, Ipopt's history): every figure."""
     model, t, Q = arm
     X = gpdm3.latent_trajectories()[0]

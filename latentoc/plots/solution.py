@@ -118,7 +118,7 @@ def plot_solution(result: Result | str | Path, max_joints: int = 12, plane: str 
 
         traj = result.trajectory
         model = model_of(traj)
-        written.append(animate(model, traj["t"], traj["q"], out / "motion.gif", fps=25,
+        written.append(animate(model, traj["t"], traj["q"], out / "motion.gif", fps=20,  # 5 cs a frame, exactly
                                plane=plane or ("xz" if floating_base(model) else "yz"), title=result.problem,
                                initial=traj.get("q_initial")))
     return written
