@@ -40,13 +40,16 @@ from typing import TYPE_CHECKING, Iterator, Sequence
 import numpy as np
 
 from ..errors import LatentocError
+from ..progress import bar
+from .hessian import hessian
 from .newton import minimize_newton
-from .objective import HYPER_NAMES, KAPPA_SQ, GPDMProblem, neg_log_posterior, optimal_w, pack, unpack
+from .objective import HYPER_NAMES, KAPPA_SQ, Evaluation, GPDMProblem, evaluate, optimal_w, pack, unpack
+from .size import GPDMSizeError, check_size  # noqa: F401  (GPDMSizeError: re-exported)
 
 if TYPE_CHECKING:  # pragma: no cover
     from .model import GPDM
 
-__all__ = ["GPDMSettings", "GPDMInputError", "learn_gpdm", "learning_problem", "prepare_data",
+__all__ = ["GPDMSettings", "GPDMInputError", "GPDMSizeError", "learn_gpdm", "learning_problem", "prepare_data",
            "pca_initialization", "roughness"]
 
 
@@ -267,12 +270,22 @@ def _initial_variables(Yc: np.ndarray, settings: GPDMSettings) -> np.ndarray:
     return pack(X, theta[:4], theta[4:])
 
 
-def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | None = None,
-               verbose: bool = False) -> "GPDM":
+@dataclass
+class _FreePoint:
+    """An evaluation of Eq. 16 seen on the learned variables (:func:`learn_gpdm`)."""
+
+    f: float
+    g: np.ndarray
+    ev: Evaluation
+
+
+def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | None = None) -> "GPDM":
     """Learn a GPDM from one sequence (N x D) or a list of sequences: minimise Eq. 16 with the
     settings' fixed hyperparameters and priors, W profiled out, until the convergence test holds.
+    Shows its progress (iteration, L, Newton decrement) on stderr (:mod:`latentoc.progress`).
 
-    Module docstring: the model and the procedure.
+    Module docstring: the model and the procedure. Raises :class:`GPDMSizeError` before anything is
+    computed when the data need more memory than the machine has.
     """
     from .model import GPDM, LearningReport
 
@@ -281,6 +294,7 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     d = int(settings.latent_dim)
     Ys, lengths = prepare_data(Y, d)
     N, D = Ys.shape
+    check_size(N, D, d)
     Y_mean = Ys.mean(axis=0)
     Yc = Ys - Y_mean
     problem = learning_problem(Yc, lengths, settings)
@@ -296,22 +310,25 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
         v[free] = z
         return v
 
-    def fg(z: np.ndarray) -> tuple[float, np.ndarray]:
+    def evaluate_free(z: np.ndarray) -> _FreePoint | None:
         try:
-            f, g = neg_log_posterior(full(z), problem)  # type: ignore[misc]
+            ev = evaluate(full(z), problem)
         except np.linalg.LinAlgError:  # a trial point with a kernel matrix beyond repair: rejected
-            return np.inf, np.zeros_like(z)
-        return float(f), g[free]
+            return None
+        return _FreePoint(ev.f, ev.g[free], ev)
+
+    def hessian_free(point: _FreePoint) -> np.ndarray:  # type: ignore[override]
+        return hessian(point.ev)[np.ix_(free, free)]
 
     lower = np.r_[np.full(n_free_x, -np.inf), np.full(int(free[n_free_x:].sum()), -bound)]
     t0 = time.perf_counter()
+    with _blas_threads(settings.blas_threads), bar(desc=f"GPDM on {N} frames", unit="it") as progress:
+        def report_step(step: int, f: float, decrement: float) -> None:
+            progress.update(1)
+            progress.set_postfix_str(f"L = {f:.10g}, decrement {decrement:.2g}", refresh=False)
 
-    def report_step(step: int, f: float, decrement: float) -> None:
-        if verbose:
-            print(f"step {step}: L = {f:.12g}, Newton decrement {decrement:.3g}, {time.perf_counter() - t0:.2f} s")
-
-    with _blas_threads(settings.blas_threads):
-        res = minimize_newton(fg, v0[free], lower, -lower, settings.ftol, settings.max_iterations, report_step)
+        res = minimize_newton(evaluate_free, hessian_free, v0[free], lower, -lower,  # type: ignore[arg-type]
+                              settings.ftol, settings.max_iterations, report_step)
     z, f, g, converged, message, decrement = res.z, res.f, res.g, res.converged, res.message, res.decrement
     gnorm = float(np.max(np.abs(g)))
     v = full(z)

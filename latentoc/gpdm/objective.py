@@ -1,10 +1,10 @@
 """Negative log posterior of the GPDM, Eq. 16 of Kang & Park (2015), with its
-exact analytic gradient.
+exact analytic gradient; :func:`evaluate` keeps the factors its Hessian
+(:mod:`latentoc.gpdm.hessian`) reuses.
 
 Variables are packed as ``v = [vec(X), ln alpha (4), ln beta (3)]`` (X row major,
-N x d).  The scale matrix ``W = diag(w)`` is held fixed inside one inner
-optimisation and updated in closed form between outer iterations
-(:func:`optimal_w`).
+N x d).  The scale matrix ``W = diag(w)`` is profiled out in closed form
+(:func:`optimal_w`) or held fixed.
 
 The value returned by :func:`neg_log_posterior` is (constants dropped)::
 
@@ -151,32 +151,127 @@ def chol_inverse(L: np.ndarray) -> np.ndarray:
     return Kinv
 
 
-def _factor(K: np.ndarray) -> tuple[float, np.ndarray]:
-    """1/2 ln|K| and K^-1 (via a Cholesky factor, jitter if needed)."""
-    L, _ = safe_cholesky(K)
-    return float(np.sum(np.log(np.diag(L)))), chol_inverse(L)
+@dataclass
+class KernelTerm:
+    """One GP term c/2 ln|K| + 1/2 tr(K^-1 T T^T) at a point, kept for the gradient and the
+    Hessian-vector products (:mod:`latentoc.gpdm.hessian`): one Cholesky factor per point."""
+
+    X: np.ndarray  # the kernel's input points (n x d)
+    R2: np.ndarray  # |x_i - x_j|^2
+    E: np.ndarray  # the RBF part s1 exp(-s2/2 R2)
+    P: np.ndarray  # K^-1
+    B: np.ndarray  # K^-1 T
+    G: np.ndarray  # dL/dK = 1/2 (c K^-1 - B B^T)
+    M: np.ndarray  # G o E
+    c: float  # D or d
+    s2: float  # beta_2 or alpha_2 (the inverse squared length scale)
+    noise: float  # beta_3 or alpha_4 (the noise precision)
+    lin: float  # alpha_3 (the linear part's weight; 0 for K_Y)
 
 
-def _gp_grad(Kinv: np.ndarray, B: np.ndarray, c: float) -> np.ndarray:
-    """dL/dK = 1/2 (c K^-1 - B B^T) with B = K^-1 T (overwrites Kinv)."""
-    G = B @ B.T
-    G *= -0.5
-    Kinv *= 0.5 * c
-    G += Kinv
-    return G
-
-
-def _rbf(R2: np.ndarray, s1: float, s2: float) -> np.ndarray:
-    """s1 exp(-s2/2 R2), computed in place in a new array."""
+def _kernel(X: np.ndarray, s1: float, s2: float, lin: float, noise: float) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """R2, E, 1/2 ln|K| and K^-1 of K = s1 exp(-s2/2 R2) + lin X X^T + I/noise (Eq. 11, 15)."""
+    R2 = sq_dist(X)
     E = R2 * (-0.5 * s2)
     np.exp(E, out=E)
     E *= s1
-    return E
+    K = E.copy()
+    if lin:
+        K += lin * (X @ X.T)
+    K[np.diag_indices_from(K)] += 1.0 / noise
+    L, _ = safe_cholesky(K)
+    del K
+    return R2, E, float(np.sum(np.log(np.diag(L)))), chol_inverse(L)
 
 
-def _rbf_point_grad(M: np.ndarray, X: np.ndarray, b2: float) -> np.ndarray:
-    """d/dX of sum(G o K_rbf) given M = G o K_rbf (G symmetric)."""
-    return -2.0 * b2 * (np.sum(M, axis=1)[:, None] * X - M @ X)
+def _term(X: np.ndarray, R2: np.ndarray, E: np.ndarray, P: np.ndarray, B: np.ndarray, c: float, s2: float,
+          noise: float, lin: float) -> KernelTerm:
+    G = B @ B.T
+    G *= -0.5
+    G += (0.5 * c) * P
+    return KernelTerm(X, R2, E, P, B, G, G * E, c, s2, noise, lin)
+
+
+def rbf_point_grad(M: np.ndarray, X: np.ndarray, s2: float) -> np.ndarray:
+    """d/dX of sum(G o E) for E = s1 exp(-s2/2 R2(X)), given M = G o E (G symmetric)."""
+    return -2.0 * s2 * (np.sum(M, axis=1)[:, None] * X - M @ X)
+
+
+@dataclass
+class Evaluation:
+    """Eq. 16 (:func:`neg_log_posterior`) at one point: the value ``f``, the gradient ``g`` and what
+    the Hessian-vector products reuse (both kernel terms, the profiled scales ``w``)."""
+
+    problem: GPDMProblem
+    v: np.ndarray
+    f: float
+    g: np.ndarray
+    obs: KernelTerm  # K_Y (c = D, T = Y W)
+    dyn: KernelTerm  # K_X (c = d, T = X_out); its contributions are weighted by lam
+    w: np.ndarray
+    profiled: bool
+
+
+def evaluate(v: np.ndarray, problem: GPDMProblem, w: np.ndarray | None = None) -> Evaluation:
+    """Eq. 16 (+ first-point prior, hyperparameter priors, optional balancing) and its exact gradient
+    at ``v`` (:func:`pack`); W profiled out if ``w`` is None (module docstring).
+
+    The length-scale derivatives use sum_ij M_ij |x_i - x_j|^2 = -sum_i x_i . g_i / s2, where g is
+    the point gradient of sum(G o E); this saves one N x N pass.
+    """
+    N, D, d = problem.N, problem.D, problem.latent_dim
+    v = np.asarray(v, dtype=float)
+    X, alpha, beta = unpack(v, N, d)
+    lam = float(problem.dynamics_weight)
+
+    # ---- observation term (Eq. 10, 11)
+    b1, b2, b3 = (float(b) for b in beta)
+    R2, E, half_logdet_Y, P = _kernel(X, b1, b2, 0.0, b3)
+    profiled = w is None
+    if w is None:  # profiled: w_d = sqrt(N / (q_d + 1/kappa^2))
+        B0 = P @ problem.Y
+        q = np.sum(problem.Y * B0, axis=0)
+        w = np.sqrt(N / (q + 1.0 / problem.kappa_sq))
+        BY = B0 * w[None, :]
+        valY = D * half_logdet_Y + 0.5 * float(np.sum(w * w * (q + 1.0 / problem.kappa_sq)))
+    else:
+        w = np.asarray(w, dtype=float)
+        BY = P @ (problem.Y * w[None, :])
+        valY = D * half_logdet_Y + 0.5 * float(np.sum((problem.Y * w[None, :]) * BY))
+    obs = _term(X, R2, E, P, BY, float(D), b2, b3, 0.0)
+
+    # ---- dynamics term (Eq. 14, 15)
+    a1, a2, a3, a4 = (float(a) for a in alpha)
+    Xin = X[problem.in_idx]
+    Xout = X[problem.out_idx]
+    R2, E, half_logdet_X, P = _kernel(Xin, a1, a2, a3, a4)
+    BX = P @ Xout
+    valX = d * half_logdet_X + 0.5 * float(np.sum(Xout * BX))
+    dyn = _term(Xin, R2, E, P, BX, float(d), a2, a4, a3)
+
+    theta = np.concatenate([alpha, beta])
+    a_p, b_p = np.asarray(problem.prior_shape, float), np.asarray(problem.prior_rate, float)
+    X1 = X[problem.first_idx]
+    f = (valY + lam * valX - N * float(np.sum(np.log(w)))
+         + float(np.sum(-(a_p - 1.0) * np.log(theta) + b_p * theta))
+         + 0.5 * float(np.sum(X1 * X1)))
+
+    # ---- gradient (the prior's d/d ln theta = -(a - 1) + b theta)
+    g_prior = -(a_p - 1.0) + b_p * theta
+    gX = rbf_point_grad(obs.M, X, b2)
+    g_lb = np.array([np.sum(obs.M), 0.5 * float(np.sum(X * gX)), -np.trace(obs.G) / b3]) + g_prior[4:]
+    g_rbf_in = rbf_point_grad(dyn.M, Xin, a2)
+    GXin = dyn.G @ Xin
+    gX[problem.in_idx] += lam * (g_rbf_in + 2.0 * a3 * GXin)
+    gX[problem.out_idx] += lam * BX
+    g_la = np.array([
+        lam * np.sum(dyn.M),
+        0.5 * lam * float(np.sum(Xin * g_rbf_in)),
+        lam * a3 * float(np.sum(Xin * GXin)),
+        -lam * np.trace(dyn.G) / a4,
+    ]) + g_prior[:4]
+    gX[problem.first_idx] += X1
+    return Evaluation(problem, v, float(f), np.concatenate([gX.ravel(), g_la, g_lb]), obs, dyn, w, profiled)
 
 
 def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray | None = None,
@@ -185,82 +280,10 @@ def neg_log_posterior(v: np.ndarray, problem: GPDMProblem, w: np.ndarray | None 
 
     Parameters: ``v`` packed variables (:func:`pack`), ``problem`` the data,
     ``w`` the per-dimension scales (D,) or None to profile them out (module
-    docstring).  Returns ``(L, dL/dv)`` or ``L``.
-
-    The length-scale derivatives use the identity
-    sum_ij M_ij |x_i - x_j|^2 = -sum_i x_i . g_i / b2, where g is the point
-    gradient of sum(G o K_rbf); this saves one N x N pass.
+    docstring).  Returns ``(L, dL/dv)`` or ``L`` (:func:`evaluate` keeps the factors as well).
     """
-    N, D, d = problem.N, problem.D, problem.latent_dim
-    X, alpha, beta = unpack(np.asarray(v, dtype=float), N, d)
-    lam = float(problem.dynamics_weight)
-
-    # ---- observation term (Eq. 10, 11)
-    b1, b2, b3 = beta
-    EY = _rbf(sq_dist(X), b1, b2)
-    KY = EY.copy()
-    KY[np.diag_indices(N)] += 1.0 / b3
-    half_logdet_Y, KYinv = _factor(KY)
-    if w is None:  # profiled: w_d = sqrt(N / (q_d + 1/kappa^2))
-        B0 = KYinv @ problem.Y
-        q = np.sum(problem.Y * B0, axis=0)
-        w = np.sqrt(N / (q + 1.0 / problem.kappa_sq))
-        BY = B0 * w[None, :]
-        valY = D * half_logdet_Y + 0.5 * float(np.sum(w * w * (q + 1.0 / problem.kappa_sq)))
-    else:
-        w = np.asarray(w, dtype=float)
-        BY = KYinv @ (problem.Y * w[None, :])
-        valY = D * half_logdet_Y + 0.5 * float(np.sum((problem.Y * w[None, :]) * BY))
-    GY = _gp_grad(KYinv, BY, float(D))
-
-    # ---- dynamics term (Eq. 14, 15)
-    a1, a2, a3, a4 = alpha
-    Xin = X[problem.in_idx]
-    Xout = X[problem.out_idx]
-    n_in = Xin.shape[0]
-    EX = _rbf(sq_dist(Xin), a1, a2)
-    KX = Xin @ Xin.T
-    KX *= a3
-    KX += EX
-    KX[np.diag_indices(n_in)] += 1.0 / a4
-    half_logdet_X, KXinv = _factor(KX)
-    BX = KXinv @ Xout
-    valX = d * half_logdet_X + 0.5 * float(np.sum(Xout * BX))
-    GX = _gp_grad(KXinv, BX, float(d))
-
-    theta = np.concatenate([alpha, beta])
-    a_p, b_p = np.asarray(problem.prior_shape, float), np.asarray(problem.prior_rate, float)  # arrays after __post_init__
-    X1 = X[problem.first_idx]
-    f = (valY + lam * valX - N * float(np.sum(np.log(w)))
-         + float(np.sum(-(a_p - 1.0) * np.log(theta) + b_p * theta))
-         + 0.5 * float(np.sum(X1 * X1)))
-    if not with_grad:
-        return f
-
-    # ---- gradient (the prior's d/d ln theta = -(a - 1) + b theta)
-    g_prior = -(a_p - 1.0) + b_p * theta
-    EY *= GY  # M_Y = G_Y o E_Y
-    gY = _rbf_point_grad(EY, X, b2)
-    g_lb = np.array([
-        np.sum(EY),
-        0.5 * float(np.sum(X * gY)),
-        -np.trace(GY) / b3,
-    ]) + g_prior[4:]
-    gX = gY
-
-    EX *= GX  # M_X / lam
-    g_rbf_in = _rbf_point_grad(EX, Xin, a2)
-    GXin = GX @ Xin
-    gX[problem.in_idx] += lam * (g_rbf_in + 2.0 * a3 * GXin)
-    gX[problem.out_idx] += lam * BX
-    g_la = np.array([
-        lam * np.sum(EX),
-        0.5 * lam * float(np.sum(Xin * g_rbf_in)),
-        lam * a3 * float(np.sum(Xin * GXin)),
-        -lam * np.trace(GX) / a4,
-    ]) + g_prior[:4]
-    gX[problem.first_idx] += X1
-    return f, np.concatenate([gX.ravel(), g_la, g_lb])
+    ev = evaluate(v, problem, w)
+    return (ev.f, ev.g) if with_grad else ev.f
 
 
 def optimal_w(Y: np.ndarray, X: np.ndarray, beta: np.ndarray,
