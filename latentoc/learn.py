@@ -20,17 +20,19 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass, is_dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
-from matplotlib.figure import Figure
 
 from .files import NPZ_ERRORS, dumps_json
 from .gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
 from .motions import Demonstration, check_frames, demonstration_from_file
 from .results import GPDM_NAME, write_files
 from .robots import load_robot, load_urdf
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["LearnedMotion", "learn_motion", "learn_file", "figures", "robot_from_argument", "load_learned_gpdm",
            "LEARN_NAME"]
@@ -87,7 +89,7 @@ def learn_motion(demo: Demonstration, latent_dim: int = 3, stride: int = 1,
     return LearnedMotion(demo, gp, frames, time.perf_counter() - t0)
 
 
-def _png(fig: Figure) -> bytes:
+def _png(fig: "Figure") -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100)
     return buffer.getvalue()
@@ -101,6 +103,8 @@ def _variance_png(learned: LearnedMotion) -> bytes:
     pts = np.vstack([(X[:-1, None, :] * (1 - s)[None, :, None] + X[1:, None, :] * s[None, :, None]).reshape(-1, X.shape[1]),
                      X[-1:]])
     tt = np.append((t[:-1, None] * (1 - s) + t[1:, None] * s).ravel(), t[-1])
+    from matplotlib.figure import Figure  # only with --plots: matplotlib takes 0.3 s to import
+
     fig = Figure(figsize=(8.0, 3.5), dpi=100)
     ax = fig.add_subplot()
     ax.plot(tt, g.variance(pts), lw=1.5, label="$\\sigma^2$ along the training path (Eq. 19)")

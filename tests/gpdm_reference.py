@@ -5,14 +5,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from latentoc.gpdm.learning import _blas_threads, learning_problem
+from latentoc.gpdm.learning import learning_problem
+from latentoc.gpdm.threads import blas_threads
 from latentoc.gpdm.objective import HYPER_NAMES, neg_log_posterior, pack
 
 
 def central_hessian(grad: Callable[[np.ndarray], np.ndarray], z: np.ndarray, h: float = 1e-5) -> np.ndarray:
     """(grad(z + h e_j) - grad(z - h e_j)) / 2h by columns, symmetrised (one BLAS thread, as learning)."""
     H = np.empty((z.size, z.size))
-    with _blas_threads(1):
+    with blas_threads(1):
         for j in range(z.size):
             e = np.zeros(z.size)
             e[j] = h

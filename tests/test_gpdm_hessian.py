@@ -60,3 +60,14 @@ def test_latent_rotations_are_flat_at_a_stationary_point_only_through_the_gradie
     expected = np.zeros(v.size)  # d/ds g(X e^(s Omega)) = d/ds g(X) e^(s Omega) at s = 0
     expected[:N * d] = (gX @ Om).ravel()
     np.testing.assert_allclose(hessian_vector(ev, t), expected, atol=1e-9 * np.max(np.abs(hessian(ev))))
+
+
+def test_fixed_hyperparameters_are_left_out():
+    """With beta_1 fixed (learning's default), the Hessian of the other variables: the full one without
+    that row and column."""
+    p, v, _ = _problem(seed=5)
+    ev = evaluate(v, p)
+    keep = np.ones(7, dtype=bool)
+    keep[4] = False
+    free = np.r_[np.ones(v.size - 7, dtype=bool), keep]
+    np.testing.assert_array_equal(hessian(ev, keep), hessian(ev)[np.ix_(free, free)])

@@ -1,18 +1,33 @@
-"""GPDM learning benchmark: learning time and final objective (Eq. 16) for
-N = 150 and 350 frames, D = 7 and 37, d = 3 on synthetic smooth motion data.
+"""GPDM learning benchmark (issue 28): each target of the issue in a fresh process, its learning time, peak
+memory and Eq. 16, with the machine it ran on.
 
-Run: ``python -m latentoc.benchmarks.gpdm_bench [--quick]``.
+* synthetic N = 350, D = 37, d = 3: <= 10 s, converged;
+* the panda example at stride 1 from the CLI (examples/panda-reach/reach.csv, 251 x 7): <= 5 s wall,
+  ``/usr/bin/time -v python -m latentoc learn ... --robot panda``;
+* the broad jump's training set (157 x 37): <= 10 s, and the minimum of the shipped model;
+* synthetic N = 1000, D = 37: <= 2 min and <= 2 GB peak.
+
+``--scaling``: time and peak memory for N = 350, 1000, 2000 (D = 37), docs/gpdm.md's table.
+Run: ``python -m latentoc bench gpdm [--scaling] [--quick]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
-from latentoc.gpdm import GPDMSettings, learn_gpdm
-from latentoc.gpdm.learning import roughness
+ROOT = Path(__file__).resolve().parents[2]
+PANDA = ROOT / "examples" / "panda-reach" / "reach.csv"
 
 
 def synthetic_motion(N: int, D: int, seed: int = 0, cycles: float = 2.0,
@@ -28,26 +43,135 @@ def synthetic_motion(N: int, D: int, seed: int = 0, cycles: float = 2.0,
     return H @ M + rng.standard_normal(D) + noise * rng.standard_normal((N, D))
 
 
+def machine() -> str:
+    """CPU model, cores, load average, numpy / scipy versions."""
+    import scipy
+
+    cpu = platform.processor() or "?"
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
+    return (f"{cpu}, {os.cpu_count()} cores, load average {load}; numpy {np.__version__}, scipy {scipy.__version__}, "
+            f"Python {platform.python_version()}")
+
+
+def _child(case: str) -> dict:
+    """One case, learned in this process: its data, learning time and model."""
+    from latentoc.gpdm import GPDMSettings, learn_gpdm
+    from latentoc.progress import set_quiet
+
+    set_quiet(True)
+    if case == "jump":
+        from latentoc.jump.training import training_jumps
+
+        Y = training_jumps(0)[0].Y
+    else:
+        N, D = (int(x) for x in case.split("x"))
+        Y = synthetic_motion(N, D)
+    t0 = time.perf_counter()
+    m = learn_gpdm(Y, GPDMSettings())
+    out = {"case": case, "shape": list(Y.shape), "time_s": time.perf_counter() - t0,
+           "objective": m.objective_value, "iterations": m.learning.iterations,
+           "evaluations": m.learning.evaluations, "decrement": m.learning.newton_decrement,
+           "converged": m.learning.converged}
+    if case == "jump":
+        out.update(_against_shipped(Y, m))
+    return out
+
+
+def _against_shipped(Y: np.ndarray, m) -> dict:  # type: ignore[no-untyped-def]
+    """Eq. 16 and the latent points (after the best rotation) against the shipped model of the same data."""
+    from latentoc.gpdm import GPDM
+    from latentoc.gpdm.cache import SHIPPED, model_path
+
+    path = SHIPPED / model_path(Y, m.settings).name
+    if not path.exists():
+        return {"shipped": None}
+    ref = GPDM.load(path)
+    U, _, Vt = np.linalg.svd(m.X.T @ ref.X)
+    return {"shipped": path.name, "shipped_objective": ref.objective_value,
+            "objective_rel_diff": abs(m.objective_value - ref.objective_value) / abs(ref.objective_value),
+            "aligned_dX": float(np.max(np.abs(m.X @ (U @ Vt) - ref.X)))}
+
+
+def _run(args: list[str]) -> tuple[float, int, str]:
+    """Wall time (s), peak RSS (bytes) and stdout of a child process."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                            env={**os.environ, "LATENTOC_QUIET": "1"})
+    out = proc.stdout.read() if proc.stdout is not None else ""
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(args)} failed with exit code {proc.returncode}")
+    return wall, int(usage.ru_maxrss) * 1024, out
+
+
+def learn_case(case: str) -> dict:
+    """A case learned in a fresh Python process, with that process's peak memory."""
+    wall, rss, out = _run([sys.executable, "-m", "latentoc.benchmarks.gpdm_bench", "--child", case])
+    return {**json.loads(out.strip().splitlines()[-1]), "wall_s": wall, "peak_rss": rss}
+
+
+def panda_cli() -> dict:
+    """``python -m latentoc learn`` on the panda example at stride 1, timed as a user sees it."""
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "latentoc", "learn", str(PANDA), "--robot", "panda", "--out", str(Path(tmp) / "o")]
+        if shutil.which("time") and Path("/usr/bin/time").exists():
+            wall, rss, out = _run(["/usr/bin/time", "-v", *cmd])
+        else:
+            wall, rss, out = _run(cmd)
+        learn = json.loads((Path(tmp) / "o" / "learn.json").read_text())
+    r = learn["learning"]
+    return {"case": "panda", "shape": [learn["learned_frames"], len(learn["demonstration"]["joints"])],
+            "time_s": learn["learning_time_s"], "wall_s": wall, "peak_rss": rss,
+            "objective": learn["objective_value"], "iterations": r["iterations"], "evaluations": r["evaluations"],
+            "decrement": r["newton_decrement"], "converged": r["converged"]}
+
+
+def _row(label: str, r: dict, limit_s: float | None, limit_gb: float | None, wall: bool = False) -> str:
+    t = r["wall_s"] if wall else r["time_s"]
+    ok = r["converged"] and (limit_s is None or t <= limit_s) and (limit_gb is None or r["peak_rss"] <= limit_gb * 1e9)
+    target = " and ".join(x for x in (f"<= {limit_s:g} s" if limit_s else "", f"<= {limit_gb:g} GB" if limit_gb else "")
+                          if x)
+    return (f"{label:<34} {r['shape'][0]:>5} x {r['shape'][1]:<3} {t:8.2f} {r['peak_rss'] / 1e9:7.2f} "
+            f"{r['iterations']:>5} {r['objective']:>17.9f} {str(r['converged']):>6}  {target or '-':<18} "
+            f"{'met' if ok else 'MISSED'}")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Print learning time and final objective for each benchmark size."""
-    p = argparse.ArgumentParser(prog="gpdm_bench", description=__doc__)
-    p.add_argument("--quick", action="store_true", help="only N=150")
-    p.add_argument("--balanced", action="store_true", help="balanced GPDM (lambda = D/d)")
+    """Print the issue's targets (or the N-scaling table), each from a fresh process, with the machine."""
+    p = argparse.ArgumentParser(prog="gpdm_bench", description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p.add_argument("--scaling", action="store_true", help="time and memory for N = 350, 1000, 2000 (D = 37)")
+    p.add_argument("--quick", action="store_true", help="leave out N = 1000")
+    p.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
-    sizes = [(150, 7), (150, 37)] + ([] if args.quick else [(350, 7), (350, 37)])
-    settings = GPDMSettings(latent_dim=3)
-    if args.balanced:
-        settings.balanced = True
-    print(f"GPDM learning benchmark (d=3, balanced={settings.balanced}, "
-          f"ftol={settings.ftol:g}, max_iterations={settings.max_iterations})")
-    print(f"{'N':>5} {'D':>4} {'time [s]':>9} {'objective':>13} {'rec. RMS':>9} {'roughness':>9}")
-    for N, D in sizes:
-        Y = synthetic_motion(N, D, seed=0)
-        t0 = time.perf_counter()
-        model = learn_gpdm(Y, settings)
-        dt = time.perf_counter() - t0
-        print(f"{N:5d} {D:4d} {dt:9.2f} {model.objective_value:13.6g} "
-              f"{model.reconstruction_rmse():9.4f} {roughness(model.X):9.4f}", flush=True)
+    if args.child is not None:
+        print(json.dumps(_child(args.child)), flush=True)
+        return 0
+    print("GPDM learning benchmark (d = 3, balanced, converged to the Newton decrement <= 1e-10 |L|, 1 BLAS thread)")
+    print(f"machine: {machine()}")
+    print(f"{'case':<34} {'N x D':>11} {'time s':>8} {'peak GB':>7} {'its':>5} {'Eq. 16':>17} {'conv.':>6}  "
+          f"{'target':<18} result")
+    if args.scaling:
+        for N in (350, 1000, 2000):
+            print(_row(f"synthetic N = {N}", learn_case(f"{N}x37"), None, None), flush=True)
+    else:
+        print(_row("synthetic (learning time)", learn_case("350x37"), 10, None), flush=True)
+        print(_row("panda example, CLI (wall, time -v)", panda_cli(), 5, None, wall=True), flush=True)
+        jump = learn_case("jump")
+        print(_row("broad jump's training set", jump, 10, None), flush=True)
+        if jump.get("shipped"):
+            print(f"  the shipped model {jump['shipped']}: Eq. 16 {jump['shipped_objective']:.9f}, relative "
+                  f"difference {jump['objective_rel_diff']:.1e}, latent points {jump['aligned_dX']:.1e} apart after "
+                  "the best rotation")
+        if not args.quick:
+            print(_row("synthetic (learning time)", learn_case("1000x37"), 120, 2), flush=True)
+    print(f"load average after: {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0
 
 

@@ -175,9 +175,10 @@ def _hyper_columns(t: KernelTerm, profiled_n: int | None) -> list[tuple[np.ndarr
     return out
 
 
-def hessian(ev: Evaluation) -> np.ndarray:
-    """The Hessian of Eq. 16 at ``ev`` (all variables, packed as :func:`~latentoc.gpdm.objective.pack`),
-    assembled in O(N^3 d^2) from the factors the gradient computed.
+def hessian(ev: Evaluation, hyper: np.ndarray | None = None) -> np.ndarray:
+    """The Hessian of Eq. 16 at ``ev`` (variables packed as :func:`~latentoc.gpdm.objective.pack`; of the
+    seven log-hyperparameters only those ``hyper`` (a mask, default all) marks), assembled in
+    O(N^3 d^2) from the factors the gradient computed.
 
     A point's derivative of K is rank two, dK = e_i u^T + u e_i^T (u the row dK_i./dx_ia), so the
     second derivative of c/2 ln|K| + 1/2 tr(K^-1 T T^T) in points (i, a) and (j, b) is
@@ -190,7 +191,9 @@ def hessian(ev: Evaluation) -> np.ndarray:
     N, d = p.N, p.latent_dim
     n = N * d
     lam = float(p.dynamics_weight)
-    H = np.zeros((n + 7, n + 7))  # point i coordinate a at row i d + a
+    keep = np.ones(7, dtype=bool) if hyper is None else np.asarray(hyper, dtype=bool)
+    m = n + int(keep.sum())
+    H = np.zeros((m, m))  # point i coordinate a at row i d + a, then the kept hyperparameters
     obs, _, _ = _point_blocks(ev.obs, N if ev.profiled else None)
     dyn, Z, UB = _point_blocks(ev.dyn, None)
     i_in, i_out = np.ix_(p.in_idx, p.in_idx), np.ix_(p.in_idx, p.out_idx)
@@ -227,6 +230,7 @@ def hessian(ev: Evaluation) -> np.ndarray:
         cols[k, n + 4:] = h[[0, 1, 3]]
     theta = np.exp(ev.v[n:])
     cols[:, n:] += np.diag(np.asarray(p.prior_rate, float) * theta)
+    cols = cols[keep][:, np.r_[np.ones(n, dtype=bool), keep]]
     H[n:, :] = cols
     H[:, n:] = cols.T
     return H

@@ -30,12 +30,10 @@ Balanced GPDM (Urtasun et al. 2006): the dynamics term times lambda = D/d (``bal
 
 from __future__ import annotations
 
-import ctypes
 import json
 import time
-from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, fields
-from typing import TYPE_CHECKING, Iterator, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -43,8 +41,10 @@ from ..errors import LatentocError
 from ..progress import bar
 from .hessian import hessian
 from .newton import minimize_newton
-from .objective import HYPER_NAMES, KAPPA_SQ, Evaluation, GPDMProblem, evaluate, optimal_w, pack, unpack
+from .objective import HYPER_NAMES, KAPPA_SQ, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
 from .size import GPDMSizeError, check_size  # noqa: F401  (GPDMSizeError: re-exported)
+from .start import COARSE_ABOVE, coarse_frames, initial_variables, interpolated_start, pca_initialization
+from .threads import blas_threads as _blas_threads, openblas_handles as _openblas_handles  # noqa: F401  (re-exported)
 
 if TYPE_CHECKING:  # pragma: no cover
     from .model import GPDM
@@ -168,17 +168,6 @@ def prepare_data(Y: np.ndarray | Sequence[np.ndarray], latent_dim: int) -> tuple
     return Ys, [a.shape[0] for a in arrays]
 
 
-def pca_initialization(Yc: np.ndarray, d: int) -> np.ndarray:
-    """PCA scores of centred data, scaled so the first column has unit std."""
-    U, S, _ = np.linalg.svd(Yc, full_matrices=False)
-    X = U[:, :d] * S[:d]
-    # deterministic signs: largest-magnitude entry of each column positive
-    idx = np.argmax(np.abs(X), axis=0)
-    X = X * np.sign(X[idx, np.arange(d)])
-    sd = float(np.std(X[:, 0]))
-    return X / sd if sd > 0 else X
-
-
 def roughness(X: np.ndarray) -> float:
     """mean |x_{t+1} - 2 x_t + x_{t-1}| / mean |x_{t+1} - x_t| of one trajectory.
 
@@ -189,56 +178,6 @@ def roughness(X: np.ndarray) -> float:
     d1 = np.linalg.norm(np.diff(X, axis=0), axis=1).mean()
     d2 = np.linalg.norm(np.diff(X, n=2, axis=0), axis=1).mean()
     return float(d2 / d1)
-
-
-_GET_NAMES = ("openblas_get_num_threads", "openblas_get_num_threads64_",
-              "scipy_openblas_get_num_threads", "scipy_openblas_get_num_threads64_")
-_SET_NAMES = ("openblas_set_num_threads", "openblas_set_num_threads64_",
-              "scipy_openblas_set_num_threads", "scipy_openblas_set_num_threads64_")
-
-
-def _openblas_handles() -> list[tuple]:
-    handles = []
-    try:
-        with open("/proc/self/maps") as fh:
-            paths = {line.split()[-1] for line in fh if "openblas" in line.lower() and "/" in line}
-    except OSError:
-        return handles
-    for p in sorted(paths):
-        try:
-            lib = ctypes.CDLL(p)
-        except OSError:
-            continue
-        get = next((getattr(lib, n) for n in _GET_NAMES if hasattr(lib, n)), None)
-        set_ = next((getattr(lib, n) for n in _SET_NAMES if hasattr(lib, n)), None)
-        if get is not None and set_ is not None:
-            handles.append((get, set_))
-    return handles
-
-
-@contextmanager
-def _blas_threads(n: int | None) -> Iterator[None]:
-    """Temporarily limit OpenBLAS threads (best effort; no-op if not found).
-
-    The kernel matrices are only a few hundred wide; on a small shared machine
-    multi-threaded BLAS was measured up to 10x slower than one thread.
-    """
-    if n is None:
-        yield
-        return
-    handles = []
-    try:
-        for get, set_ in _openblas_handles():
-            old = int(get())
-            set_(int(n))
-            handles.append((set_, old))
-    except Exception:  # pragma: no cover - defensive
-        pass
-    try:
-        yield
-    finally:
-        for set_, old in handles:
-            set_(old)
 
 
 def _prior_arrays(settings: GPDMSettings) -> tuple[np.ndarray, np.ndarray]:
@@ -256,18 +195,6 @@ def learning_problem(Yc: np.ndarray, lengths: list[int], settings: GPDMSettings)
     D, d = Yc.shape[1], int(settings.latent_dim)
     return GPDMProblem(Yc, list(lengths), d, dynamics_weight=D / d if settings.balanced else 1.0,
                        prior_shape=shape, prior_rate=rate, kappa_sq=settings.kappa_sq)
-
-
-def _initial_variables(Yc: np.ndarray, settings: GPDMSettings) -> np.ndarray:
-    N, d = Yc.shape[0], int(settings.latent_dim)
-    if settings.init == "pca":
-        X = pca_initialization(Yc, d)
-    else:
-        X = np.random.default_rng(settings.seed).standard_normal((N, d))
-    theta = np.concatenate([settings.alpha0, settings.beta0]).astype(float)
-    for name, value in settings.fixed.items():
-        theta[HYPER_NAMES.index(name)] = float(value)
-    return pack(X, theta[:4], theta[4:])
 
 
 @dataclass
@@ -298,7 +225,14 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     Y_mean = Ys.mean(axis=0)
     Yc = Ys - Y_mean
     problem = learning_problem(Yc, lengths, settings)
-    v0 = _initial_variables(Yc, settings)
+    t0 = time.perf_counter()
+    if N > COARSE_ABOVE:  # coarse to fine: start from the model of every second frame (start.py)
+        frames = coarse_frames(lengths)
+        starts = np.cumsum([0] + lengths)
+        coarse = learn_gpdm([Ys[a + idx] for a, idx in zip(starts[:-1], frames)], settings)
+        v0 = interpolated_start(coarse.X, np.concatenate([coarse.alpha, coarse.beta]), lengths, frames)
+    else:
+        v0 = initial_variables(Yc, settings)
     free = np.ones(v0.size, dtype=bool)
     for name in settings.fixed:
         free[N * d + HYPER_NAMES.index(name)] = False
@@ -317,11 +251,10 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
             return None
         return _FreePoint(ev.f, ev.g[free], ev)
 
-    def hessian_free(point: _FreePoint) -> np.ndarray:  # type: ignore[override]
-        return hessian(point.ev)[np.ix_(free, free)]
+    def hessian_free(point: _FreePoint) -> np.ndarray:
+        return hessian(point.ev, free[n_free_x:])
 
     lower = np.r_[np.full(n_free_x, -np.inf), np.full(int(free[n_free_x:].sum()), -bound)]
-    t0 = time.perf_counter()
     with _blas_threads(settings.blas_threads), bar(desc=f"GPDM on {N} frames", unit="it") as progress:
         def report_step(step: int, f: float, decrement: float) -> None:
             progress.update(1)
