@@ -317,3 +317,18 @@ def test_same_model_with_the_sequences_in_either_order():
     ba = learn_gpdm([b, a], GPDMSettings(latent_dim=2))
     assert ab.learning.converged and ba.learning.converged
     assert ba.objective_value == pytest.approx(ab.objective_value, rel=1e-6)
+
+
+def test_a_long_recording_starts_from_its_coarse_model():
+    """Above 200 frames learning starts from the model of every second frame, interpolated: it
+    converges, with a 3-frame sequence beside a long one (kept whole in the coarse model)."""
+    from latentoc.gpdm.start import coarse_frames, interpolated_start
+
+    frames = coarse_frames([3, 4, 9])
+    assert [f.tolist() for f in frames] == [[0, 1, 2], [0, 1, 2, 3], [0, 2, 4, 6, 8]]
+    Xc = np.arange(12.0)[:, None] * np.ones((1, 2))
+    X = interpolated_start(Xc, np.ones(7), [3, 4, 9], frames)[:32].reshape(16, 2)
+    np.testing.assert_allclose(X[7:, 0], np.linspace(7.0, 11.0, 9))  # linear between the kept frames
+    Y = synthetic_motion(230, 5, seed=7, noise=0.02)
+    model = learn_gpdm([Y[:3], Y[3:]], GPDMSettings(latent_dim=2))
+    assert model.learning.converged and model.sequence_lengths == [3, 227]

@@ -3,7 +3,7 @@ settings give the same model, and a problem learns its model once per machine, n
 
 Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.nlp.jit.cache_dir`), the key a
 hash of the learner's version, the training sequences and the settings. The package ships the
-models of its slow-to-learn problems (the broad jump's, about 2 min) under the same names in
+models of its larger problems (the broad jump's: 5 s to learn) under the same names in
 ``latentoc/models/``; tests/test_gpdm_cache.py checks each is a converged minimum of its data.
 
 A cached model is written under a temporary name and renamed, with its SHA-256 in

@@ -16,14 +16,17 @@ The model (the same for every problem, :class:`GPDMSettings` defaults):
 
 Procedure (:func:`learn_gpdm`):
 
-1. Stack the training sequences, subtract the column means.
+1. Stack the training sequences, subtract the column means; refuse data too long for the memory
+   learning needs (:mod:`latentoc.gpdm.size`).
 2. X from PCA (scores scaled so that the first latent coordinate has unit standard
-   deviation), alpha = (0.9, 1, 0.1, e), beta = (1, 1, e).
+   deviation), alpha = (0.9, 1, 0.1, e), beta = (1, 1, e); above 200 frames, the model of every
+   second frame instead, its latent points interpolated (:mod:`latentoc.gpdm.start`).
 3. W profiled out in closed form (:mod:`latentoc.gpdm.objective`); a damped saddle-free Newton
    method (:mod:`latentoc.gpdm.newton`) on X and the free log-hyperparameters with the exact
-   gradient, until the Newton decrement (the decrease of L a Newton step predicts) is at most
-   ``ftol`` |L|. Reaching ``max_iterations``, or a hyperparameter on ``log_hyper_bound``, is
-   reported as not converged (:class:`~latentoc.gpdm.model.LearningReport`).
+   gradient and Hessian (:mod:`latentoc.gpdm.hessian`), until the Newton decrement (the decrease
+   of L a Newton step predicts) is at most ``ftol`` |L|. Reaching ``max_iterations``, or a
+   hyperparameter on ``log_hyper_bound``, is reported as not converged
+   (:class:`~latentoc.gpdm.model.LearningReport`).
 
 Balanced GPDM (Urtasun et al. 2006): the dynamics term times lambda = D/d (``balanced=True``).
 """
@@ -226,8 +229,8 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     Yc = Ys - Y_mean
     problem = learning_problem(Yc, lengths, settings)
     t0 = time.perf_counter()
-    if N > COARSE_ABOVE:  # coarse to fine: start from the model of every second frame (start.py)
-        frames = coarse_frames(lengths)
+    frames = coarse_frames(lengths)
+    if N > COARSE_ABOVE and sum(map(len, frames)) <= 0.75 * N:  # coarse to fine (start.py)
         starts = np.cumsum([0] + lengths)
         coarse = learn_gpdm([Ys[a + idx] for a, idx in zip(starts[:-1], frames)], settings)
         v0 = interpolated_start(coarse.X, np.concatenate([coarse.alpha, coarse.beta]), lengths, frames)

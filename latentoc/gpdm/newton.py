@@ -71,6 +71,12 @@ def minimize_newton(evaluate: Callable[[np.ndarray], Point | None], hessian: Cal
             on_step(steps, point.f, decrement)
         if decrement <= ftol * max(abs(point.f), 1.0):
             converged, message = True, f"Newton decrement {decrement:.3g} <= ftol |L| after {steps} steps"
+            # the certified Newton step itself: the minimum to about the square of the remaining error
+            final = np.clip(z - V @ (gv / a), lower, upper)
+            new = evaluate(final)
+            evaluations += 1
+            if new is not None and new.f <= point.f:
+                z, point = final, new
             break
         if steps == max_steps:
             break

@@ -41,10 +41,11 @@ def initial_variables(Yc: np.ndarray, settings: Any) -> np.ndarray:
 
 
 def coarse_frames(lengths: list[int]) -> list[np.ndarray]:
-    """Every second frame of each sequence, its last frame kept (indices within the sequence)."""
+    """Every second frame of each sequence, its last frame kept (indices within the sequence); a
+    sequence of fewer than 5 frames keeps them all (a sequence needs 3)."""
     out = []
     for n in lengths:
-        idx = np.arange(0, n, 2)
+        idx = np.arange(0, n, 2) if n >= 5 else np.arange(n)
         out.append(idx if idx[-1] == n - 1 else np.append(idx, n - 1))
     return out
 
