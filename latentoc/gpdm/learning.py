@@ -46,7 +46,7 @@ from .hessian import hessian
 from .newton import minimize_newton
 from .objective import HYPER_NAMES, KAPPA_SQ, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
 from .size import GPDMSizeError, check_size  # noqa: F401  (GPDMSizeError: re-exported)
-from .start import COARSE_ABOVE, coarse_frames, initial_variables, interpolated_start, pca_initialization
+from .start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start, pca_initialization
 from .threads import blas_threads as _blas_threads, openblas_handles as _openblas_handles  # noqa: F401  (re-exported)
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -217,9 +217,14 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     Module docstring: the model and the procedure. Raises :class:`GPDMSizeError` before anything is
     computed when the data need more memory than the machine has.
     """
+    return _learn(Y, GPDMSettings() if settings is None else settings, COARSE_ABOVE)
+
+
+def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_above: int) -> "GPDM":
+    """:func:`learn_gpdm`, starting from the model of every second frame above ``coarse_above`` frames
+    (that model's own levels halve down to COARSE_DOWN_TO frames: start.py)."""
     from .model import GPDM, LearningReport
 
-    settings = GPDMSettings() if settings is None else settings
     _check_settings(settings)
     d = int(settings.latent_dim)
     Ys, lengths = prepare_data(Y, d)
@@ -230,9 +235,9 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     problem = learning_problem(Yc, lengths, settings)
     t0 = time.perf_counter()
     frames = coarse_frames(lengths)
-    if N > COARSE_ABOVE and sum(map(len, frames)) <= 0.75 * N:  # coarse to fine (start.py)
+    if N > coarse_above and sum(map(len, frames)) <= 0.75 * N:  # coarse to fine (start.py)
         starts = np.cumsum([0] + lengths)
-        coarse = learn_gpdm([Ys[a + idx] for a, idx in zip(starts[:-1], frames)], settings)
+        coarse = _learn([Ys[a + idx] for a, idx in zip(starts[:-1], frames)], settings, COARSE_DOWN_TO)
         v0 = interpolated_start(coarse.X, np.concatenate([coarse.alpha, coarse.beta]), lengths, frames)
     else:
         v0 = initial_variables(Yc, settings)

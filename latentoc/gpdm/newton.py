@@ -7,7 +7,9 @@ factors the gradient computed), its eigenvalues made positive (|lambda|, so that
 are descended), and Levenberg steps s = -V diag(1 / (|lambda| + mu)) V^T g; mu follows the ratio of
 the actual to the predicted decrease (a trust region in the Hessian's metric). A Hessian serves up
 to ``reuse`` steps while they decrease L as predicted. It stops when the Newton decrement
-1/2 g^T |H|^-1 g, the decrease a Newton step predicts, is at most ``ftol`` |L| on a fresh Hessian.
+1/2 g^T |H|^-1 g, the decrease a Newton step predicts, is at most ``ftol`` |L| on a fresh Hessian,
+and takes that Newton step (if L does not rise): the point returned is the minimum to about the
+square of the certified error, not wherever the path stopped.
 """
 
 from __future__ import annotations

@@ -1,6 +1,8 @@
-"""Where learning (Eq. 16) starts: PCA scores and the settings' hyperparameters, or, for a long
-recording, the model of every second frame with its latent points interpolated to all frames
-(coarse to fine: :func:`~latentoc.gpdm.learning.learn_gpdm`, measured in docs/gpdm.md)."""
+"""Where learning (Eq. 16) starts: PCA scores and the settings' hyperparameters, or, for a recording
+of more than COARSE_ABOVE frames, the model of every second frame with its latent points
+interpolated to all frames; that model starts from its own every second frame, and so on down to
+COARSE_DOWN_TO frames, which start from PCA (coarse to fine: :func:`~latentoc.gpdm.learning.learn_gpdm`,
+measured in docs/gpdm.md)."""
 from __future__ import annotations
 
 from typing import Any
@@ -9,10 +11,12 @@ import numpy as np
 
 from .objective import HYPER_NAMES, pack
 
-__all__ = ["COARSE_ABOVE", "coarse_frames", "initial_variables", "interpolated_start", "pca_initialization"]
+__all__ = ["COARSE_ABOVE", "COARSE_DOWN_TO", "coarse_frames", "initial_variables", "interpolated_start", "pca_initialization"]
 
-#: learning on more frames than this starts from the model of every second frame (docs/gpdm.md)
+#: learning on more frames than this starts from the model of every second frame (docs/gpdm.md) ...
 COARSE_ABOVE = 200
+#: ... whose own start halves the frames again while they are more than this
+COARSE_DOWN_TO = 100
 
 
 def pca_initialization(Yc: np.ndarray, d: int) -> np.ndarray:
