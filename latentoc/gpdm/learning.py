@@ -266,7 +266,7 @@ def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_
     with _blas_threads(settings.blas_threads), bar(desc=f"GPDM on {N} frames", unit="it") as progress:
         def report_step(step: int, f: float, decrement: float) -> None:
             progress.update(1)
-            progress.set_postfix_str(f"L = {f:.10g}, decrement {decrement:.2g}", refresh=False)
+            progress.set_postfix_str(f"L = {f:.10g}, decrement {decrement:.2g}")  # each iteration shown
 
         res = minimize_newton(evaluate_free, hessian_free, v0[free], lower, -lower,  # type: ignore[arg-type]
                               settings.ftol, settings.max_iterations, report_step)
