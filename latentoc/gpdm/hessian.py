@@ -198,15 +198,17 @@ def hessian(ev: Evaluation, hyper: np.ndarray | None = None) -> np.ndarray:
     dyn, Z, UB = _point_blocks(ev.dyn, None)
     i_in, i_out = np.ix_(p.in_idx, p.in_idx), np.ix_(p.in_idx, p.out_idx)
     P, B = ev.dyn.P, ev.dyn.B
-    cross = [[-(UB[a][:, b][:, None] * P + B[:, b][:, None] * Z[a]) for b in range(d)]  # (in i, a) x (out j, b)
-             for a in range(d)]
+
+    def cross(a: int, b: int) -> np.ndarray:  # rows (in i, a), columns (out j, b); each used once
+        return -(UB[a][:, b][:, None] * P + B[:, b][:, None] * Z[a])
+
     for a in range(d):
         for b in range(a, d):
             C = obs.pop((a, b))
             T = np.zeros((N, N))  # the dynamics' blocks at their rows of X
             T[i_in] = dyn.pop((a, b))
-            T[i_out] += cross[a][b]
-            T.T[i_out] += cross[b][a]
+            T[i_out] += cross(a, b)
+            T.T[i_out] += cross(b, a)
             if a == b:
                 T[np.ix_(p.out_idx, p.out_idx)] += P
                 T[p.first_idx, p.first_idx] += 1.0 / lam  # the first points' N(0, I) prior
@@ -215,7 +217,6 @@ def hessian(ev: Evaluation, hyper: np.ndarray | None = None) -> np.ndarray:
             H[a:n:d, b:n:d] = C
             if b != a:
                 H[b:n:d, a:n:d] = C.T
-    del cross
 
     # hyperparameter columns: alpha (dynamics, weighted by lam), then beta
     cols = np.zeros((7, n + 7))

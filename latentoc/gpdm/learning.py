@@ -239,8 +239,9 @@ def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_
         starts = np.cumsum([0] + lengths)
         coarse = _learn([Ys[a + idx] for a, idx in zip(starts[:-1], frames)], settings, COARSE_DOWN_TO)
         v0 = interpolated_start(coarse.X, np.concatenate([coarse.alpha, coarse.beta]), lengths, frames)
+        origin = f" from the model of {coarse.X.shape[0]} of the frames"
     else:
-        v0 = initial_variables(Yc, settings)
+        v0, origin = initial_variables(Yc, settings), ""
     free = np.ones(v0.size, dtype=bool)
     for name in settings.fixed:
         free[N * d + HYPER_NAMES.index(name)] = False
@@ -270,7 +271,8 @@ def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_
 
         res = minimize_newton(evaluate_free, hessian_free, v0[free], lower, -lower,  # type: ignore[arg-type]
                               settings.ftol, settings.max_iterations, report_step)
-    z, f, g, converged, message, decrement = res.z, res.f, res.g, res.converged, res.message, res.decrement
+    z, f, g, converged, decrement = res.z, res.f, res.g, res.converged, res.decrement
+    message = res.message + origin
     gnorm = float(np.max(np.abs(g)))
     v = full(z)
     X, alpha, beta = unpack(v, N, d)

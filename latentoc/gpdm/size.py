@@ -14,10 +14,11 @@ from ..errors import LatentocError
 
 __all__ = ["GPDMSizeError", "available_memory", "check_size", "learning_memory"]
 
-#: peak bytes per N^2 kernel entry and per Hessian entry, and the fixed part (measured: docs/gpdm.md)
-_PER_KERNEL_ENTRY = 8 * 60
+#: peak bytes per N^2 kernel entry and per Hessian entry, and the fixed part: 15-20 % above the peaks
+#: measured for N = 350, 1000, 2000 (docs/gpdm.md)
+_PER_KERNEL_ENTRY = 8 * 52
 _PER_HESSIAN_ENTRY = 8 * 4
-_FIXED = 300 * 2 ** 20
+_FIXED = 200 * 2 ** 20
 
 
 class GPDMSizeError(LatentocError, ValueError):
