@@ -25,16 +25,25 @@ def jump_parts(jump_setup):
 
 @pytest.fixture(scope="session")
 def small_jump(jump_parts):
-    """A broad-jump NLP with few nodes (phase 2: distance, wrench samples every 50 ms) and its
-    training start (:func:`latentoc.jump.start.initial_point`)."""
-    from latentoc.jump.nlp import build_nlp
+    """A broad-jump NLP with few nodes and every row family (phase 2: distance; every node row,
+    contact samples every 50 ms and flight samples every 50 ms with every torque row, the tube) and
+    its training start (:func:`latentoc.jump.start.initial_point`)."""
+    import numpy as np
+
+    from latentoc.jump.nlp import build_nlp, contact_sample_grid, tube_times
+    from latentoc.jump.selection import Selection
     from latentoc.jump.settings import JumpSettings
     from latentoc.jump.start import initial_point
 
     p = jump_parts
     js = p.js
-    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, wrench_spacing=0.05)
-    nlp = build_nlp(p.robot, p.layer, p.blocks, js.phases, settings, js.init["P"], "distance")
+    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05)
+    ph, nk = js.phases, p.robot.unmirrored.size
+    tc = contact_sample_grid(settings, ph)
+    tf = np.round(np.arange(ph.takeoff + 0.02, ph.touchdown - 0.01, 0.05), 3)
+    selection = Selection(np.ones((12, nk)), np.ones((12, 8)), tc, np.ones((len(tc), nk)), np.ones((len(tc), 8)),
+                          tf, np.ones((len(tf), nk)), tube_times(settings, ph))
+    nlp = build_nlp(p.robot, p.layer, p.blocks, ph, settings, js.init["P"], "distance", selection)
     x0 = initial_point(p.robot, p.layer, nlp, js.init["P"], js.init["t"], js.init["base"], js.init["x_L"],
                        js.phases.takeoff, js.phases.touchdown)
     return SimpleNamespace(**vars(p), settings=settings, nlp=nlp, x0=x0)
@@ -44,7 +53,6 @@ def small_jump(jump_parts):
 def small_export(small_jump):
     """The 1 kHz export (:func:`latentoc.jump.export.trajectory`) of the small NLP's training start."""
     from latentoc.jump.export import trajectory
-    from latentoc.jump.solve import JumpSolution
 
     sj = small_jump
-    return trajectory(sj.robot, sj.layer, sj.js.phases, JumpSolution(sj.nlp, sj.x0, None, None, {}))
+    return trajectory(sj.robot, sj.layer, sj.js.phases, sj.nlp, sj.x0)

@@ -12,7 +12,7 @@ import pinocchio as pin
 from latentoc.jump.base import base_to_freeflyer
 
 SAGITTAL = [0, 2, 4]
-POINT_FRAMES = ("lfoot", "lfoot_end", "ltoes_end")  # heel (on the foot), ball, toe tip
+POINT_FRAMES = ("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")  # heel (on the foot), ball, toe tip, pad (on the toes)
 MIRROR = np.array([1.0, -1.0, 1.0])
 
 
@@ -31,26 +31,27 @@ def full_state(smap, b, bd, bdd, y, yd, ydd):
             np.concatenate([a6, smap.to_full(ydd, z7)[7:]]))
 
 
-def foot_points(model, data, q, heel_offset):
-    """World heel, ball and toe tip of the left foot (3 x 3 columns) by forward kinematics."""
+def foot_points(model, data, q, geom):
+    """World heel, ball, toe tip and pad of the left foot (3 x 4 columns) by forward kinematics."""
     pin.framesForwardKinematics(model, data, q)
     M = data.oMf[model.getFrameId("lfoot")]
-    return np.column_stack([M.act(np.asarray(heel_offset, float)),
+    T = data.oMf[model.getFrameId("ltoes_end")]
+    return np.column_stack([M.act(np.asarray(geom.heel_offset, float)),
                             data.oMf[model.getFrameId("lfoot_end")].translation,
-                            data.oMf[model.getFrameId("ltoes_end")].translation])
+                            T.translation, T.act(np.asarray(geom.pad_offset, float))])
 
 
 def point_forces(lam, mu):
-    """(fx, fz) of heel, ball, toe (3 x 2) from the six friction-pyramid edge weights."""
-    lam = np.asarray(lam, float).reshape(3, 2)
+    """(fx, fz) of heel, ball, toe, pad (4 x 2) from the eight friction-pyramid edge weights."""
+    lam = np.asarray(lam, float).reshape(4, 2)
     return np.column_stack([mu * (lam[:, 0] - lam[:, 1]), lam[:, 0] + lam[:, 1]])
 
 
-def generalized_force(model, data, q, heel_offset, forces):
-    """sum J^T f of the left foot's point forces (3 x 2: fx, fz of heel, ball, toe), each on its
+def generalized_force(model, data, q, geom, forces):
+    """sum J^T f of the left foot's point forces (4 x 2: fx, fz of heel, ball, toe, pad), each on its
     own body, and their mirror images on the right foot: rnea without minus rnea with them as
     external forces (at rest, so only the forces differ)."""
-    P = foot_points(model, data, q, heel_offset).T
+    P = foot_points(model, data, q, geom).T
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     pin.forwardKinematics(model, data, q)
     for side in "lr":

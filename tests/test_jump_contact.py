@@ -11,13 +11,13 @@ from latentoc.jump.training import FOOT, TOE, jump_model, training_jumps
 def test_pyramid_forces_are_unilateral_and_in_the_cone():
     rng = np.random.default_rng(1)
     for _ in range(20):
-        lam = rng.uniform(0, 100, 6)
+        lam = rng.uniform(0, 100, 8)
         for fx, fz in point_forces(lam, 0.4):
             assert fz >= 0 and abs(fx) <= 0.4 * fz + 1e-12
 
 
 def test_point_forces_act_on_their_own_bodies():
-    """Symbolic sum J^T f (heel, ball on the foot, toe on the toes, right foot mirrored) equals
+    """Symbolic sum J^T f (heel, ball on the foot, toe and pad on the toes, right foot mirrored) equals
     numeric Pinocchio: rnea with the same forces as external forces on the joints' bodies."""
     from latentoc.jump.contact import generator_columns, point_generalized_force, point_jacobians
 
@@ -28,17 +28,18 @@ def test_point_forces_act_on_their_own_bodies():
     d = model.createData()
     rng = np.random.default_rng(5)
     q = tr.Q[40]
-    lam = rng.uniform(0, 200, 6)
+    lam = rng.uniform(0, 200, 8)
     fs = point_forces(lam, 0.4)
     gen_sym = np.array(point_generalized_force(sym, geom, ca.DM(q), fs)).ravel()
     # reference: external point forces through rnea (f_ext in each joint's local frame)
     pin.framesForwardKinematics(model, d, q)
     M = d.oMf[model.getFrameId(FOOT)]
+    T = d.oMf[model.getFrameId(TOE)]
     left = [M.translation + M.rotation @ geom.heel_offset, d.oMf[model.getFrameId("lfoot_end")].translation,
-            d.oMf[model.getFrameId(TOE)].translation]
+            T.translation, T.translation + T.rotation @ geom.pad_offset]
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     for side in "lr":
-        for k, frame in enumerate(("lfoot", "lfoot_end", "ltoes_end")):
+        for k, frame in enumerate(("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")):
             j = model.frames[model.getFrameId(side + frame[1:])].parentJoint
             p = left[k] * ([1, 1, 1] if side == "l" else [1, -1, 1])
             f_world = pin.Force(np.array([fs[k][0], 0.0, fs[k][1]]), np.cross(p, [fs[k][0], 0.0, fs[k][1]]))
@@ -61,3 +62,16 @@ def test_numeric_foot_points_match_the_symbolic_ones():
     for i in (0, 40, 90):
         pin.framesForwardKinematics(model, d, tr.Q[i])
         assert np.allclose(foot_points(model, d, geom), np.array(sym_points(tr.Q[i])), atol=1e-12)
+
+
+def test_the_pad_lies_behind_the_toe_tip_on_the_ground_when_standing():
+    from latentoc.jump.contact import TOE_PAD, foot_points
+
+    model, _ = jump_model()
+    q = training_jumps()[0].Q[0]
+    geom = FootGeometry.from_standing(model, q)
+    d = model.createData()
+    pin.framesForwardKinematics(model, d, q)
+    heel, ball, toe, pad = foot_points(model, d, geom).T
+    np.testing.assert_allclose(pad - toe, [-TOE_PAD, 0.0, min(ball[2], toe[2]) - toe[2]], atol=1e-12)
+    assert heel[0] < ball[0] < pad[0] < toe[0]

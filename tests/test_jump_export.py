@@ -1,10 +1,10 @@
 """The 1 kHz export (latentoc.jump.export): its motion's derivatives and the contact forces between
-the NLP's nodes (balanced_edge_weights)."""
+the NLP's nodes and samples (corrected_edge_weights)."""
 import numpy as np
 import pinocchio as pin
 
 from latentoc.jump.contact import FootGeometry, generator_columns, point_jacobians
-from latentoc.jump.export import balanced_edge_weights
+from latentoc.jump.export import corrected_edge_weights
 from latentoc.jump.training import jump_model, training_jumps
 
 
@@ -18,33 +18,31 @@ def _static():
     return model, tau, C
 
 
-def test_static_stance_gets_unilateral_forces_within_the_torque_limits():
-    """Standing still: edge weights >= 0 that balance the base rows of numeric rnea exactly, on
-    the loaded points only, with the joint torques inside limits around the balanced torques."""
+def test_correction_balances_the_base_rows_on_the_loaded_edges_least_norm():
+    """Standing still from a guess: the corrected edge weights balance the base rows of numeric rnea
+    exactly, on the loaded points only, and are the guess plus the least-norm correction (its
+    change lies in the row space of the loaded edges' base rows)."""
     model, tau, C = _static()
-    free = np.array([False, False, True, True, True, True])  # heel unloaded
-    lam = balanced_edge_weights(C, tau, np.full(6, 100.0), free, -1e4 * np.ones(model.nv - 6),
-                                1e4 * np.ones(model.nv - 6))
+    free = np.array([False, False, True, True, True, True, True, True])  # heel unloaded
+    lam0 = np.full(8, 100.0)
+    lam = corrected_edge_weights(C, tau, lam0, free)
     assert np.all(lam >= 0) and np.all(lam[~free] == 0)
     np.testing.assert_allclose(C[[0, 2, 4]] @ lam, tau[[0, 2, 4]], rtol=1e-8, atol=1e-6)
-    # tight limits around that solution's torques: still met
-    tj = tau[6:] - C[6:] @ lam
-    lam2 = balanced_edge_weights(C, tau, np.zeros(6), free, tj - 1.0, tj + 1.0)
-    tj2 = tau[6:] - C[6:] @ lam2
-    assert np.all(tj2 >= tj - 1.0 - 1e-6) and np.all(tj2 <= tj + 1.0 + 1e-6)
-    np.testing.assert_allclose(C[[0, 2, 4]] @ lam2, tau[[0, 2, 4]], rtol=1e-8, atol=1e-6)
+    Cr = C[[0, 2, 4]][:, free]
+    change = lam[free] - lam0[free]
+    np.testing.assert_allclose(change, Cr.T @ np.linalg.lstsq(Cr.T, change, rcond=None)[0], atol=1e-8)
 
 
-def test_a_pulling_wrench_is_balanced_outside_the_cone():
-    """A base wrench that needs the ground to pull (gravity reversed): no unilateral forces
-    give it, so the fallback balances the rows with a negative edge weight."""
+def test_an_edge_pushed_below_zero_is_held_at_zero():
+    """A guess whose least-norm correction would push an edge below zero: that edge is held at
+    zero and the others balance the rows, all non-negative."""
     model, tau, C = _static()
-    free = np.ones(6, bool)
-    t = tau.copy()
-    t[[0, 2, 4]] *= -1.0
-    lam = balanced_edge_weights(C, t, np.zeros(6), free, -1e4 * np.ones(model.nv - 6), 1e4 * np.ones(model.nv - 6))
-    np.testing.assert_allclose(C[[0, 2, 4]] @ lam, t[[0, 2, 4]], rtol=1e-8, atol=1e-6)
-    assert lam.min() < 0
+    free = np.ones(8, bool)
+    lam0 = np.zeros(8)
+    lam0[0] = 5e3  # far too much on one heel edge
+    lam = corrected_edge_weights(C, tau, lam0, free)
+    assert lam.min() >= 0 and np.sum(lam == 0) >= 1
+    np.testing.assert_allclose(C[[0, 2, 4]] @ lam, tau[[0, 2, 4]], rtol=1e-8, atol=1e-6)
 
 
 def test_exported_velocity_and_acceleration_are_derivatives_of_the_motion(small_jump, small_export):

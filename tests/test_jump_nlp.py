@@ -8,8 +8,6 @@ objective's gradient with those of the objective, and the exact Hessian of the L
 central differences of the Lagrangian's gradient (sigma grad f + J^T lam); each row against
 its own scale, so a small row family's error is not hidden by a large one's.
 """
-import dataclasses
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -93,78 +91,99 @@ def test_exact_hessian_matches_central_differences_of_the_lagrangian_gradient(po
     np.testing.assert_allclose(H_f + H_g, Hu, atol=1e-9 * max(1.0, np.abs(Hu).max()))
 
 
-def test_multipliers_follow_their_rows_into_an_nlp_with_more_samples(small_jump):
-    """A warm start's multipliers carried to an NLP with more wrench and flight torque samples
-    (solve.carried_multipliers) sit on the same constraints: each carried row has the same value
-    there, the new samples' rows get zero, and lam . g is unchanged."""
-    from latentoc.jump.nlp import Samples, build_nlp
-    from latentoc.jump.solve import carried_multipliers
+def test_point_and_multipliers_follow_their_rows_into_an_nlp_with_more_samples(small_jump):
+    """A solution carried into an NLP with more contact and flight samples (the exchange's next
+    round, jump.warm): the shared variables keep their values, each carried row has the same value
+    there, the new samples' rows get zero multipliers and hold at the carried point (their
+    variables follow from the rest), and lam . g is unchanged."""
+    from latentoc.jump.nlp import build_nlp
+    from latentoc.jump.selection import Selection
+    from latentoc.jump.warm import carried_multipliers, carried_point
 
     sj = small_jump
     old = sj.nlp
-    none = Samples(**{f.name: np.zeros(0) for f in dataclasses.fields(Samples)})
-    extra = dataclasses.replace(none, wrench=np.array([0.1234, 0.9]), flight_torque=np.array([0.5]))
+    nk = sj.robot.unmirrored.size
+    extra = Selection(np.zeros((12, nk)), np.zeros((12, 8)), np.array([0.1234, 0.9123]), np.ones((2, nk)),
+                      np.zeros((2, 8)), np.array([0.5]), np.ones((1, nk)), np.zeros(0))
     new = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "distance",
-                    samples=old.meta["samples"].merged(extra))
-    assert new.nlp.m > old.nlp.m and new.variables.n == old.variables.n
+                    old.selection.merged(extra))
+    assert new.nlp.m > old.nlp.m and new.variables.n == old.variables.n + 2 * 8 + 4
+    x, _ = carried_point(old, new, sj.x0)
+    for name in old.variables.shapes:
+        if name not in ("lam_sample", "flight_sample"):
+            np.testing.assert_array_equal(new.variables.unpack(x)[name], old.variables.unpack(sj.x0)[name])
     lam = np.random.default_rng(13).uniform(0.5, 1.5, old.nlp.m)
     carried = carried_multipliers(old, new, lam)
-    g_old, g_new = old.nlp.constraints(sj.x0), new.nlp.constraints(sj.x0)
-    sampled = np.zeros(new.nlp.m, bool)  # the rows of the families placed at the samples
+    g_old, g_new = old.nlp.constraints(sj.x0), new.nlp.constraints(x)
+    times = np.round(new.row_times, 9)
+    fams = np.empty(new.nlp.m, object)
     for f in new.nlp.families:
-        if f.name in ("wrench", "flight_torque"):
-            sampled[new.nlp.row_offset[f.name]:new.nlp.row_offset[f.name] + f.n_rows] = True
-    times = np.round(new.meta["row_times"], 9)
-    at_new = sampled & np.isin(times, np.round(np.concatenate([extra.wrench, extra.flight_torque]), 9))
+        fams[new.family_rows(f.name)] = f.name
+    sampled = np.isin(fams, ["contact_sample", "flight", "flight_pitch"])
+    at_new = sampled & np.isin(times, [0.1234, 0.9123, 0.5])
     assert np.all(carried[at_new] == 0) and np.all(carried[~at_new] > 0)
-    assert (~at_new).sum() == old.nlp.m and at_new.sum() == new.nlp.m - old.nlp.m
+    assert (~at_new).sum() == old.nlp.m
     np.testing.assert_array_equal(np.sort(carried[~at_new]), np.sort(lam))
     assert carried @ g_new == pytest.approx(lam @ g_old, rel=1e-12)
+    # the new samples' equality rows hold where their variables were solved for
+    eq = at_new & np.isin(new.row_names, ["flight_base", "pitch_rate"])
+    assert eq.sum() == 4 and np.abs(g_new[eq]).max() < 1e-9
     for name in set(old.row_names):  # the same rows in the same order, family by family
         np.testing.assert_allclose(g_new[~at_new][new.row_names[~at_new] == name], g_old[old.row_names == name],
                                    rtol=1e-12, atol=1e-12)
-        np.testing.assert_array_equal(carried[~at_new][new.row_names[~at_new] == name], lam[old.row_names == name])
 
 
 def test_row_and_variable_bounds(small_jump):
     """Torque rows bounded by the training limits over their range (per joint, at every node and
     sample), the contact schedule in the heel and ball bounds (a loaded point on the ground within
-    the contact tolerance, an unloaded ball above the soft-sole depth), the feet, cones, polygons,
-    flight clearance and tube one-sided as the module doc says; edge weights >= 0 and zero on
-    the unloaded points."""
+    the contact tolerance, an unloaded ball above the soft-sole depth), the centre of pressure by
+    the loaded support, the feet, polygons, flight clearance and tube one-sided as the module doc
+    says; edge weights >= 0 and zero on the unloaded points."""
+    from latentoc.jump.contact import POINTS
+
     sj = small_jump
     jn, robot, s, ph = sj.nlp, sj.robot, sj.settings, sj.js.phases
-    names, lbg, ubg = jn.row_names, jn.lbg, jn.ubg
+    names, lbg, ubg, comps = jn.row_names, jn.lbg, jn.ubg, jn.row_components
     lo, hi, act, scale = robot.limits.tau_min, robot.limits.tau_max, robot.active, robot.torque_scale
-    for part, pos in (("torque", robot.unmirrored), ("torque_free", np.intersect1d(robot.force_free, robot.unmirrored))):
-        sel = names == part
-        n = sel.sum() // len(pos)
-        assert n * len(pos) == sel.sum() and n > 0
-        np.testing.assert_allclose(lbg[sel].reshape(n, -1) * scale[pos], np.tile(lo[act[pos]], (n, 1)), rtol=1e-12)
-        np.testing.assert_allclose(ubg[sel].reshape(n, -1) * scale[pos], np.tile(hi[act[pos]], (n, 1)), rtol=1e-12)
-    tc = np.concatenate([jn.grid["stance"], jn.grid["land"]])
-    heel, ball = ph.loaded("heel", tc), ph.loaded("ball", tc)
+    sel = names == "torque"
+    assert sel.sum() > 0 and set(comps[sel]) == set(robot.unmirrored)
+    np.testing.assert_allclose(lbg[sel] * scale[comps[sel]], lo[act][comps[sel]], rtol=1e-12)
+    np.testing.assert_allclose(ubg[sel] * scale[comps[sel]], hi[act][comps[sel]], rtol=1e-12)
+    t = jn.row_times
+    for part in ("heel_height", "ball_height"):
+        assert (names == part).sum() == 12  # at the contact nodes only
+    heel, ball = ph.loaded("heel", t[names == "heel_height"]), ph.loaded("ball", t[names == "ball_height"])
     ct = s.contact_tolerance
     np.testing.assert_array_equal(lbg[names == "heel_height"], -ct)
     np.testing.assert_array_equal(ubg[names == "heel_height"], np.where(heel, ct, np.inf))
     np.testing.assert_array_equal(lbg[names == "ball_height"], np.where(ball, -ct, -s.ball_tolerance))
     np.testing.assert_array_equal(ubg[names == "ball_height"], np.where(ball, ct, np.inf))
     assert not heel.all() and not ball.all() and heel.any() and ball.any()
+    # one centre-of-pressure row for the rearmost loaded point at every node and contact sample
+    back = names[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
+    tb = t[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
+    want = np.where(ph.loaded("heel", tb), "cop_heel", np.where(ph.loaded("ball", tb), "cop_ball", "cop_pad"))
+    np.testing.assert_array_equal(back, want)
+    assert len(back) == (names == "cop_front").sum() == 12 + len(jn.selection.contact)
     one_sided = {"toe_position": (-s.foot_tolerance, s.foot_tolerance), "dynamics": (0, 0), "takeoff": (0, 0),
                  "impact": (0, 0), "touchdown_position": (0, 0), "pitch_integration": (0, 0),
+                 "flight_base": (0, 0), "pitch_rate": (0, 0),
                  "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "flight_clearance": (0, np.inf),
-                 "tube": (-np.inf, 1.0), "wrench_normal": (0, np.inf), "wrench_friction": (0, np.inf),
-                 "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf), "cop_pad": (0, np.inf)}
-    assert set(one_sided) | {"torque", "torque_free", "heel_height", "ball_height"} == set(names)
+                 "tube": (-np.inf, 1.0), "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf),
+                 "cop_pad": (0, np.inf)}
+    assert set(one_sided) | {"torque", "heel_height", "ball_height"} == set(names)
     for part, (a, b) in one_sided.items():
         assert np.all(lbg[names == part] == a) and np.all(ubg[names == part] == b), part
     var = jn.variables
-    lam_ub = jn.ubx[var.index("lam")]
-    assert np.all(jn.lbx[var.index("lam")] == 0) and np.all(jn.lbx[var.index("lam_impact")] == 0)
-    np.testing.assert_array_equal(lam_ub[:, :2] == 0, np.repeat(~heel[:, None], 2, axis=1))
-    np.testing.assert_array_equal(lam_ub[:, 2:4] == 0, np.repeat(~ball[:, None], 2, axis=1))
-    assert np.all(np.isinf(lam_ub[:, 4:]))
-    others = np.setdiff1d(np.arange(var.n), np.concatenate([var.index("lam").ravel(), var.index("lam_impact")]))
+    for block, times in (("lam", np.concatenate([jn.grid["stance"], jn.grid["land"]])), ("lam_sample", jn.selection.contact)):
+        ub = jn.ubx[var.index(block)]
+        assert np.all(jn.lbx[var.index(block)] == 0)
+        for k, point in enumerate(POINTS):
+            np.testing.assert_array_equal(ub[:, 2 * k:2 * k + 2] == 0,
+                                          np.repeat(~ph.loaded(point, times)[:, None], 2, axis=1))
+    assert np.all(jn.lbx[var.index("lam_impact")] == 0)
+    bounded = np.concatenate([var.index(b).ravel() for b in ("lam", "lam_sample", "lam_impact")])
+    others = np.setdiff1d(np.arange(var.n), bounded)
     assert np.all(np.isinf(jn.lbx[others])) and np.all(np.isinf(jn.ubx[others]))
 
 
@@ -176,9 +195,11 @@ def test_objectives(small_jump):
 
     sj = small_jump
     parts = sj.nlp.variables.unpack(sj.x0)
-    reg = FORCE_REGULARISATION * (np.sum(parts["lam"] ** 2) + np.sum(parts["lam_impact"] ** 2))
+    reg = FORCE_REGULARISATION * (np.sum(parts["lam"] ** 2) + np.sum(parts["lam_impact"] ** 2)
+                                  + np.sum(parts["lam_sample"] ** 2))
     assert sj.nlp.nlp.objective(sj.x0) == pytest.approx(-parts["x_L"][0] + reg, rel=1e-12)
-    feas = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "feasibility")
+    feas = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "feasibility",
+                     sj.nlp.selection)
     assert feas.nlp.objective(sj.x0) == pytest.approx(reg, rel=1e-12)
     x = np.array(sj.x0)
     P = feas.variables.index("P")

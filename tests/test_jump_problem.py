@@ -46,7 +46,8 @@ class _Solves:
         ok, dist = self.outcome[warm is not None]
         result = {"tube": self.tube, "success": ok, "warm_start": warm is not None, "distance": dist,
                   "status": "Solve_Succeeded" if ok else "Maximum_Iterations_Exceeded",
-                  "iterations": 7 if warm is not None else 9, "solve_time_s": 1.0 if warm is not None else 3.0}
+                  "iterations": 7 if warm is not None else 9,
+                  "times": {"solve_s": 1.0 if warm is not None else 3.0}}
         return SimpleNamespace(result=result, warm={"tube": self.tube, "x0": np.full(3, dist)})
 
 

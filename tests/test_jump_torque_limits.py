@@ -44,7 +44,7 @@ def test_schedule_unloads_the_heel_after_heel_off():
     geom = FG.from_standing(model, tr.Q[0])
     ph = training_phases(model, tr, geom=geom)
     contact = (tr.t <= ph.takeoff) | (tr.t >= ph.touchdown)
-    loaded = np.column_stack([ph.loaded(k, tr.t) for k in ("heel", "ball", "toe")])
+    loaded = np.column_stack([ph.loaded(k, tr.t) for k in ("heel", "ball", "toe", "pad")])
     td = estimate_training_dynamics(model, smap, tr, geom, contact, loaded=loaded)
     off = contact & ~loaded[:, 0]
     assert off.sum() > 5 and np.all(td.forces[off, 0, :] == 0)

@@ -26,7 +26,7 @@ def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
     tj = tau[6:] - (J.T @ wrench[0])[6:]
     return model, {"t": np.linspace(0, 0.004, n), "q": np.tile(q, (n, 1)), "v": np.zeros((n, model.nv)),
                    "a": np.zeros((n, model.nv)), "wrench": wrench, "contact": np.ones(n, dtype=int),
-                   "heel_offset": geom.heel_offset, "touchdown": 0.0, "settle": 0.0,
+                   "heel_offset": geom.heel_offset, "pad_offset": geom.pad_offset, "touchdown": 0.0, "settle": 0.0,
                    "tau_min": np.minimum(tj, 0) - 1.0, "tau_max": np.maximum(tj, 0) + 1.0}
 
 
@@ -100,7 +100,7 @@ def test_point_forces_on_their_bodies_balance_a_static_stance():
     model, arrays = _static_arrays()
     q = arrays["q"][0]
     d = model.createData()
-    C = generator_columns(point_jacobians(model, d, q, FootGeometry(arrays["heel_offset"])), 0.4)
+    C = generator_columns(point_jacobians(model, d, q, FootGeometry(arrays["heel_offset"], arrays["pad_offset"])), 0.4)
     z = np.zeros(model.nv)
     tau = pin.rnea(model, d, q, z, z)
     lam, res = nnls(C[[0, 2, 4]], tau[[0, 2, 4]])
@@ -119,10 +119,10 @@ def test_point_forces_on_their_bodies_balance_a_static_stance():
 def test_loaded_support_margin_follows_the_schedule():
     """Standing still, the centre of pressure lies between heel and toe: with the heel loaded the
     scheduled margin is the plain one; with only the toe tip loaded the same stance needs the
-    centre of pressure (toe_x - my / fz) inside a 1 cm pad, so the margin is pad - (toe_x - cop)."""
+    centre of pressure (toe_x - my / fz, fx = 0) inside a 1 cm pad, so the margin is pad - (toe_x - cop)."""
     model, arrays = _static_arrays()
     n = len(arrays["t"])
-    arrays["loaded"] = np.ones((n, 3), dtype=int)
+    arrays["loaded"] = np.ones((n, 4), dtype=int)
     r = verify(model, arrays)
     assert np.isclose(r["cop_margin_loaded"], r["cop_margin"]) and r["cop_margin"] > 0
     fx, fz, my = arrays["wrench"][0, [0, 2, 4]]

@@ -83,15 +83,15 @@ def _reference(block: RobotBlock, u, G, lam):
 def _mapped(block: RobotBlock, u, G, lam):
     """The block's mapped rows, jac and hess at K nodes, in the evaluators' node-major layout."""
     K, n_in, n_out = len(lam), block.n_local, block.n_out
-    args = [a.T for a in u]
+    args = list(u)  # K x n: the column-major data of the mapped n x K inputs
     tangents = [stack_tangents(g) for g in G]
-    F = np.asarray(block.mapped("rows", K)(*args)).T
+    F = block.mapped("rows", K)(*args)[0].reshape(K, n_out)
     Fj, J = block.mapped("jac", K)(*args, *tangents)
-    H, mu = block.mapped("hess", K)(*args, *tangents, lam.T)
-    return {"F": F, "Fj": np.asarray(Fj).T,
-            "J": np.asarray(J).reshape(n_out, K, n_in).transpose(1, 0, 2),
-            "H": np.asarray(H).reshape(n_in, K, n_in).transpose(1, 0, 2),
-            "mu": np.asarray(mu).T}
+    H, mu = block.mapped("hess", K)(*args, *tangents, lam)
+    return {"F": F, "Fj": Fj.reshape(K, n_out),
+            "J": J.reshape(K, n_in, n_out).transpose(0, 2, 1),
+            "H": H.reshape(K, n_in, n_in).transpose(0, 2, 1),
+            "mu": mu.reshape(K, -1)}
 
 
 def _close(got, want, rtol=1e-12):

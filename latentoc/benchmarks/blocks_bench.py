@@ -16,7 +16,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-NODES = {"contact": 94, "wrench": 124, "flight": 80, "pitch_rate": 159, "takeoff": 1, "touchdown": 1}
+NODES = {"contact": 94, "flight_dynamics": 80, "flight_clearance": 78, "pitch_rate": 159, "takeoff": 1, "touchdown": 1}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,7 +5,10 @@ Contact points of the left foot (the right one is its mirror image):
 * ``ball`` - the end of the foot bone (frame ``lfoot_end``);
 * ``toe`` - the end of the toes bone (frame ``ltoes_end``);
 * ``heel`` - a point fixed in the foot body (frame ``lfoot``, at the ankle): the ankle
-  dropped vertically to the ground in the first (standing) training frame.
+  dropped vertically to the ground in the first (standing) training frame;
+* ``pad`` - a point fixed in the toes body ``TOE_PAD`` behind the toe tip on the ground when
+  standing: the toes' contact patch, so that a foot on its toes alone can hold a moment (with
+  the toe tip alone every base row of such a sample would ask the motion for none).
 
 In contact (stance and landing) the toe tip stays near its ground point ``(x_pin, z = 0)``
 (the contact rows, :mod:`.rows.contact`): the captured push-off rolls over it (the ball
@@ -31,9 +34,11 @@ from ..dynamics import SymbolicModel
 from ..mocap.symmetry import SymmetryMap
 from .training import BALL, FOOT, TOE
 
-POINTS = ("heel", "ball", "toe")
+POINTS = ("heel", "ball", "toe", "pad")
+FRAMES = {"heel": FOOT, "ball": BALL, "toe": TOE, "pad": TOE}  # the body frame each point is fixed in
 MU = 0.4
-TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch when only the toe tip is loaded
+TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch (the pad point)
+EDGES = 2 * len(POINTS)  # friction-pyramid edge weights per foot
 
 
 def joint_embedding(smap: SymmetryMap) -> np.ndarray:
@@ -47,9 +52,10 @@ def joint_embedding(smap: SymmetryMap) -> np.ndarray:
 
 @dataclass
 class FootGeometry:
-    """Heel point in the ``lfoot`` frame."""
+    """Heel point in the ``lfoot`` frame, pad point in the ``ltoes_end`` frame."""
 
     heel_offset: np.ndarray
+    pad_offset: np.ndarray
 
     @classmethod
     def from_standing(cls, model: pin.Model, q_stand: np.ndarray) -> "FootGeometry":
@@ -59,17 +65,20 @@ class FootGeometry:
         ground = min(d.oMf[model.getFrameId(BALL)].translation[2], d.oMf[model.getFrameId(TOE)].translation[2])
         heel = M.translation.copy()
         heel[2] = ground
-        return cls(M.rotation.T @ (heel - M.translation))
+        T = d.oMf[model.getFrameId(TOE)]
+        pad = T.translation + np.array([-TOE_PAD, 0.0, ground - T.translation[2]])
+        return cls(M.rotation.T @ (heel - M.translation), T.rotation.T @ (pad - T.translation))
 
 
 def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
-    """(q) -> P (3 x 3): world heel, ball, toe of the left foot as columns."""
+    """(q) -> P (3 x 4): world heel, ball, toe, pad of the left foot as columns."""
     q = ca.SX.sym("q", sym.nq)
     pf, Rf = sym.frame_placement(FOOT)(q)
     heel = pf + Rf @ ca.DM(geom.heel_offset)
     ball = sym.frame_placement(BALL)(q)[0]
-    toe = sym.frame_placement(TOE)(q)[0]
-    return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, toe)], ["q"], ["P"])
+    pt, Rt = sym.frame_placement(TOE)(q)
+    pad = pt + Rt @ ca.DM(geom.pad_offset)
+    return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, pt, pad)], ["q"], ["P"])
 
 
 def generator_matrix(mu: float = MU) -> np.ndarray:
@@ -78,10 +87,10 @@ def generator_matrix(mu: float = MU) -> np.ndarray:
 
 
 def point_forces(lam, mu: float = MU):
-    """(fx, fz) of heel, ball, toe from 6 generator weights (works on numpy and casadi)."""
+    """(fx, fz) of heel, ball, toe, pad from their generator weights (numpy and casadi)."""
     G = generator_matrix(mu)
     out = []
-    for k in range(3):
+    for k in range(len(POINTS)):
         l1, l2 = lam[2 * k], lam[2 * k + 1]
         out.append((G[0, 0] * l1 + G[0, 1] * l2, l1 + l2))
     return out
@@ -90,10 +99,10 @@ def point_forces(lam, mu: float = MU):
 def toe_wrench(lam, P, mu: float = MU):
     """World-aligned wrench (6) at the toe tip of the point forces (casadi): force, moment about the toe."""
     f = point_forces(lam, mu)
-    fx = f[0][0] + f[1][0] + f[2][0]
-    fz = f[0][1] + f[1][1] + f[2][1]
+    fx = sum(fk[0] for fk in f)
+    fz = sum(fk[1] for fk in f)
     my = 0
-    for k in (0, 1):
+    for k in (0, 1, 3):  # heel, ball, pad about the toe tip (column 2)
         rx, rz = P[0, k] - P[0, 2], P[2, k] - P[2, 2]
         my = my + rz * f[k][0] - rx * f[k][1]
     return ca.vertcat(fx, 0, fz, 0, my, 0)
@@ -107,18 +116,18 @@ def _skew(p):
 
 
 def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -> ca.SX:
-    """sum_k J_k(q)^T f_k over the heel, ball and toe points of both feet (casadi, nv).
+    """sum_k J_k(q)^T f_k over the contact points of both feet (casadi, nv).
 
     ``forces`` are the left foot's (fx, fz) per point (:func:`point_forces`); the right foot
     carries their mirror image.  Each force acts on its own body (heel and ball on the foot,
-    the toe tip on the toes), with the point Jacobian ``J_lin - [p - o]x J_ang`` of that body's
+    the toe tip and the pad on the toes), with the point Jacobian ``J_lin - [p - o]x J_ang`` of that body's
     frame (LOCAL_WORLD_ALIGNED), as in the training estimate (:mod:`.torque_limits`).
     """
     P = points_function(sym, geom)(q)
     gen = 0
     for side in "lr":
-        for k, frame in enumerate((FOOT, BALL, TOE)):
-            name = side + frame[1:]
+        for k, point in enumerate(POINTS):
+            name = side + FRAMES[point][1:]
             o = sym.frame_placement(name)(q)[0]
             p = P[:, k] if side == "l" else ca.DM(MIRROR) @ P[:, k]
             J = sym.frame_jacobian(name)(q)
@@ -129,24 +138,25 @@ def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -
 
 
 def foot_points(model: pin.Model, data: pin.Data, geom: FootGeometry) -> np.ndarray:
-    """Numeric (3, 3): world heel, ball, toe of the left foot as columns (frames already placed),
-    the numeric twin of :func:`points_function`."""
+    """Numeric (3, 4): world heel, ball, toe, pad of the left foot as columns (frames already
+    placed), the numeric twin of :func:`points_function`."""
     M = data.oMf[model.getFrameId(FOOT)]
+    T = data.oMf[model.getFrameId(TOE)]
     return np.column_stack([M.translation + M.rotation @ geom.heel_offset, data.oMf[model.getFrameId(BALL)].translation,
-                            data.oMf[model.getFrameId(TOE)].translation])
+                            T.translation, T.translation + T.rotation @ geom.pad_offset])
 
 
 def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootGeometry) -> np.ndarray:
-    """Numeric (3, 3, nv): for heel, ball, toe, the left point's linear Jacobian plus the mirrored
-    right one's, so that ``sum_k J[k].T @ (fx_k, 0, fz_k)`` is :func:`point_generalized_force`.
+    """Numeric (4, 3, nv): for heel, ball, toe, pad, the left point's linear Jacobian plus the
+    mirrored right one's, so that ``sum_k J[k].T @ (fx_k, 0, fz_k)`` is :func:`point_generalized_force`.
     Leaves ``data`` with the joint Jacobians and frame placements of ``q``."""
     pin.computeJointJacobians(model, data, q)
     pin.framesForwardKinematics(model, data, q)
-    out = np.zeros((3, 3, model.nv))
+    out = np.zeros((len(POINTS), 3, model.nv))
     left = foot_points(model, data, geom).T
     for side in "lr":
-        for k, frame in enumerate((FOOT, BALL, TOE)):
-            fid = model.getFrameId(side + frame[1:])
+        for k, point in enumerate(POINTS):
+            fid = model.getFrameId(side + FRAMES[point][1:])
             p = left[k] if side == "l" else MIRROR @ left[k]
             J = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
             out[k] += J[:3] - pin.skew(p - data.oMf[fid].translation) @ J[3:]
@@ -154,6 +164,6 @@ def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootG
 
 
 def generator_columns(Jp: np.ndarray, mu: float = MU) -> np.ndarray:
-    """(nv, 6): generalized force of a unit weight on each friction-pyramid edge (heel, ball, toe)."""
+    """(nv, 8): generalized force of a unit weight on each friction-pyramid edge (heel, ball, toe, pad)."""
     G = generator_matrix(mu)
-    return np.column_stack([Jp[k].T @ np.array([G[0, e], 0.0, G[1, e]]) for k in range(3) for e in range(2)])
+    return np.column_stack([Jp[k].T @ np.array([G[0, e], 0.0, G[1, e]]) for k in range(len(Jp)) for e in range(2)])

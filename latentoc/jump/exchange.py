@@ -1,56 +1,161 @@
-"""Rows only where they can bind: an exchange of the sampled rows against the 1 kHz grid.
+"""Rows only where they can bind: the exchange between the NLP's selection and the 1 kHz checks.
 
-The wrench samples in contact and the flight's torque rows are not tied to variables, so they
-can sit at any time. The solve starts with the packaged samples
-(:func:`latentoc.jump.nlp.default_samples`); after each converged solve every sampled row is evaluated on the 1 kHz grid (:func:`candidates`), the worst
-time of each violated stretch is added (:func:`binding_times`), and
-the solve resumes from its point and multipliers. It stops when no 1 kHz time is violated by
-more than ``tol``, so these rows hold on the exported grid, not only at the samples.
+A solve starts with the rows that are within a margin of binding at its start point (the seed)
+and, after each converged solve, re-checks every hard constraint on the exported 1 kHz motion
+with numeric Pinocchio (:mod:`.export`, :func:`.verify.series`): torque limits, the needed
+wrench's cone and centre of pressure, the exported point forces' cones, the ZMP and the COM in
+the support polygon, the tube. Every violated or nearly violated stretch adds a sample at its
+worst 1 kHz time and its neighbours (contact: its own edge weights and the rows that are near
+there; flight: its own free-fall variables and torque rows; the tube: a point), and the contact
+nodes' own torque and polygon rows that are near are switched on; then the solve resumes warm
+(:mod:`.warm`). It ends when nothing on the 1 kHz grid is violated beyond :data:`TOLERANCE`.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .nlp import JumpNLP, Samples
+from ..nlp.evaluators import BlockEvaluator
+from .nlp import JumpNLP
 from .phases import Phases
+from .robot import JumpRobot
+from .selection import POLYGON_EDGES, Selection
 
-__all__ = ["candidates", "binding_times", "EXCHANGED", "NEIGHBOURS"]
+__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING"]
 
-EXCHANGED = {"wrench": "wrench", "flight_torque": "flight_torque", "tube": "tube"}  # Samples field -> family
-NEIGHBOURS = (-0.002, 0.002)  # s: added with each violated stretch's worst time
+NEIGHBOUR = 0.002  # s: either side of a short stretch's worst time (a bound moves a little)
+SPACING = 0.005  # s between the samples along a stretch that comes near
 
 
-def candidates(phases: Phases, rate_hz: float = 1000.0) -> Samples:
-    """The 1 kHz grid's times in contact (wrench rows), in flight (torque rows) and inside (tube)."""
-    t = np.linspace(0.0, phases.duration, int(round(phases.duration * rate_hz)) + 1)
-    contact = (t < phases.takeoff) | (t > phases.touchdown)
-    flight = (t >= phases.takeoff) & (t <= phases.touchdown)
+@dataclass(frozen=True)
+class Margins:
+    """How close to binding a row must come to be chosen: torque (fraction of the joint's limit
+    range), wrench (body weights: needed normal force, friction cone, point cones), cop and
+    polygon (m), tube (fraction of delta)."""
+
+    torque: float
+    wrench: float
+    cop: float
+    polygon: float
+    tube: float
+
+
+SEED = Margins(torque=0.25, wrench=0.05, cop=0.01, polygon=0.02, tube=0.05)  # at a phase's start
+NEAR = Margins(torque=0.02, wrench=0.005, cop=0.001, polygon=0.001, tube=0.002)  # after a solve
+# what counts as violated on the 1 kHz grid (torque in N m, wrench in N, lengths in m, tube in delta):
+# far below what the physics can tell apart, and above what Ipopt holds the rows to
+TOLERANCE = Margins(torque=0.005, wrench=0.1, cop=1e-4, polygon=1e-5, tube=1e-6)
+
+
+def _picked(slack: np.ndarray, below: np.ndarray, spacing: int, neighbours: int) -> np.ndarray:
+    """Indices of samples in each run of ``below``: its least ``slack`` and, along the run, every
+    ``spacing``-th sample of the grid (a bound that holds along a stretch is held along it); a short
+    run also its ``neighbours``-th neighbours on either side (the bound moves a little)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], below.astype(np.int8), [0]])))
+    out = []
+    for a, b in zip(edges[::2], edges[1::2]):
+        k = a + int(np.nanargmin(slack[a:b]))
+        grid = np.arange(a, b)
+        out.append(np.concatenate([[k], grid[grid % spacing == 0]]))  # one grid for every row: fewer samples
+        if b - a < spacing:
+            out.append(np.array([k - neighbours, k + neighbours]))
+    return np.unique(np.clip(np.concatenate(out), 0, len(slack) - 1)) if out else np.zeros(0, np.int64)
+
+
+def _allowed(idx: np.ndarray, allowed: np.ndarray) -> np.ndarray:
+    return idx[allowed[idx]] if len(idx) else idx
+
+
+def _rel_torque(sr: dict[str, np.ndarray], robot: JumpRobot) -> np.ndarray:
+    """Torque slack of the kept joints in units of their limit range (n x kept)."""
+    kept = robot.unmirrored
+    return sr["torque"][:, kept] / robot.torque_scale[kept]
+
+
+def violations(sr: dict[str, np.ndarray], traj: dict, delta: float, weight: float) -> dict[str, float]:
+    """The worst violation of each checked kind on the 1 kHz grid (0: held), in N m, N, m and delta."""
+    def worst(x: np.ndarray) -> float:
+        return float(max(0.0, -np.nanmin(x))) if np.isfinite(x).any() else 0.0
+
+    return {"torque": worst(sr["torque"]), "normal": worst(sr["normal"]), "friction": worst(sr["friction"]),
+            "point_cone": worst(sr["point_cone"]), "cop": worst(sr["cop_loaded"]), "zmp": worst(sr["zmp"]),
+            "com": worst(sr["com"]), "tube": float(max(0.0, np.max(traj["sigma2"]) / delta - 1.0))}
+
+
+def violated(v: dict[str, float]) -> bool:
+    """Whether any kind is violated beyond :data:`TOLERANCE`."""
+    tol = {"torque": TOLERANCE.torque, "normal": TOLERANCE.wrench, "friction": TOLERANCE.wrench,
+           "point_cone": TOLERANCE.wrench, "cop": TOLERANCE.cop, "zmp": TOLERANCE.polygon, "com": TOLERANCE.polygon,
+           "tube": TOLERANCE.tube}
+    return any(v[k] > tol[k] for k in tol)
+
+
+def _node_rows(nlp: JumpNLP, w: np.ndarray, robot: JumpRobot, phases: Phases, m: Margins
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """The contact nodes' torque and polygon rows within the margins at ``w``, from every output of
+    their block (chosen or not)."""
+    fam = next(f for f in nlp.nlp.families if f.name == "contact")
+    ev = fam.evaluator
+    assert isinstance(ev, BlockEvaluator)
+    F = ev.values(fam.local_inputs(w))
+    layout = ev.block.layout
+    kept = robot.unmirrored
+    tau = F[:, layout["torque"]][:, kept]
+    lo, hi = robot.limits.tau_min[robot.active][kept], robot.limits.tau_max[robot.active][kept]
+    torque = np.minimum(tau - lo, hi - tau) / robot.torque_scale[kept] < m.torque
+    tc = np.concatenate([nlp.grid["stance"], nlp.grid["land"]])
+    polygon = np.hstack([-F[:, layout["zmp_polygon"]], -F[:, layout["com_polygon"]]]) < m.polygon
+    polygon[tc < phases.touchdown - 1e-9] = False
+    polygon[tc < phases.settle - 1e-9, POLYGON_EDGES:] = False
+    return torque, polygon
+
+
+def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], robot: JumpRobot,
+                phases: Phases, delta: float, m: Margins) -> Selection:
+    """The rows within the margins ``m`` of binding at ``w`` (module doc): the contact nodes' own
+    rows, and samples at the worst 1 kHz time of each stretch that comes that near."""
+    t = np.asarray(traj["t"])
+    contact = np.asarray(traj["contact"]).astype(bool)
     inside = (t > 0) & (t < phases.duration)
-    return Samples(t[contact & inside], t[flight], t[inside])
+    W = robot.weight
+    every = max(1, int(round(SPACING / (t[1] - t[0]))))
+    nb = max(1, int(round(NEIGHBOUR / (t[1] - t[0]))))
+    rel = _rel_torque(sr, robot)
+    torque_near = rel < m.torque
+    picked_c: set[int] = set()
+    picked_f: set[int] = set()
+    for j in range(rel.shape[1]):
+        for k in _picked(rel[:, j], torque_near[:, j] & inside, every, nb):
+            (picked_c if contact[k] else picked_f).add(k)
+    wrench = {"normal": (sr["normal"] / W, m.wrench), "friction": (sr["friction"] / W, m.wrench),
+              "point_cone": (sr["point_cone"] / W, m.wrench), "cop_loaded": (sr["cop_loaded"], m.cop)}
+    for x, thr in wrench.values():
+        picked_c.update(_picked(x, (x < thr) & contact & inside, every, nb).tolist())
+    poly = np.hstack([sr["zmp"], sr["com"]])
+    poly_near = poly < m.polygon  # NaN: False
+    for e in range(poly.shape[1]):
+        picked_c.update(_picked(poly[:, e], poly_near[:, e] & inside, every, nb).tolist())
+    kc = _allowed(np.array(sorted(picked_c), int), contact & inside)
+    kf = _allowed(np.array(sorted(picked_f), int), ~contact & inside)
+    sigma = np.asarray(traj["sigma2"]) / delta
+    kt = _allowed(_picked(-sigma, (sigma > 1.0 - m.tube) & inside, every, nb), inside)
+    node_torque, node_polygon = _node_rows(nlp, w, robot, phases, m)
+    return Selection(node_torque, node_polygon, t[kc], torque_near[kc], poly_near[kc], t[kf], torque_near[kf], t[kt])
 
 
-def binding_times(probe: JumpNLP, w: np.ndarray, tol: dict[str, float]) -> tuple[Samples, dict[str, float]]:
-    """Where the sampled rows, evaluated at ``w`` in ``probe`` (an NLP whose samples are the
-    :func:`candidates`), are violated by more than ``tol[family]``: each violated stretch of the 1 kHz
-    grid gives its worst time, a local minimum of the slack. Also the largest violation of each
-    exchanged family (in the rows' units: body weights, torque limit ranges)."""
-    g = probe.nlp.constraints(w)
-    slack = np.minimum(g - probe.lbg, probe.ubg - g)  # < 0: violated
-    times = probe.meta["row_times"]
-    out, worst = {}, {}
-    for field, fam in EXCHANGED.items():
-        off = probe.nlp.row_offset.get(fam)
-        if off is None:
-            out[field], worst[fam] = np.zeros(0), 0.0
-            continue
-        n = next(f.n_rows for f in probe.nlp.families if f.name == fam)
-        tt, inv = np.unique(times[off:off + n], return_inverse=True)
-        per_time = np.full(len(tt), np.inf)
-        np.minimum.at(per_time, inv, slack[off:off + n])
-        worst[fam] = float(max(0.0, -per_time.min(initial=np.inf)))
-        left = np.concatenate([[np.inf], per_time[:-1]])
-        right = np.concatenate([per_time[1:], [np.inf]])
-        worst_t = tt[(per_time < -tol[fam]) & (per_time <= left) & (per_time <= right)]
-        near = np.concatenate([worst_t] + [worst_t + dt for dt in NEIGHBOURS])
-        out[field] = np.unique(tt[np.isin(np.round(tt, 6), np.round(near, 6))])
-    return Samples(out["wrench"], out["flight_torque"], out["tube"]), worst
+def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], robot: JumpRobot,
+                   phases: Phases, delta: float, tube: np.ndarray) -> Selection:
+    """A phase's first selection: the rows within :data:`SEED` of binding at its start ``w``, and
+    the tube at ``tube``."""
+    s = chosen_rows(nlp, w, traj, sr, robot, phases, delta, SEED)
+    return s.merged(Selection.empty(s.node_torque.shape[0], s.n_joints, tube))
+
+
+def with_samples(selection: Selection, contact: np.ndarray, flight: np.ndarray) -> Selection:
+    """``selection`` with contact samples at ``contact`` and flight samples at ``flight``, each with
+    every torque row (and the contact samples every polygon row that applies)."""
+    nj, npoly = selection.n_joints, 2 * POLYGON_EDGES
+    return selection.merged(Selection(np.zeros_like(selection.node_torque), np.zeros_like(selection.node_polygon),
+                                      contact, np.ones((len(contact), nj)), np.ones((len(contact), npoly)),
+                                      flight, np.ones((len(flight), nj)), np.zeros(0)))

@@ -2,36 +2,37 @@
 
 Joint motion from the GP layer along the optimal latent path, the base from the contact
 phases' splines and, in flight, ballistic from the takeoff state with the pitch rate
-integrated on the 1 kHz grid. Between the NLP's contact nodes the point forces are the edge
-weights nearest the interpolated node forces that balance the sagittal base rows exactly,
-unilateral and in their cones with the joint torques in their limits where such weights exist
-(:func:`balanced_edge_weights`).
+integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
+and samples (the wrench split is part of the solution there); between them, the edge weights
+interpolated and corrected, least norm, to balance the sagittal base rows
+(:func:`corrected_edge_weights`). The exchange (:mod:`.exchange`) adds a contact sample wherever
+this split does not hold the cones or the torque limits.
 """
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
-from scipy.optimize import minimize
 
 from ..latent.gp_layer import GPLayer
 from .base import base_to_freeflyer
-from .contact import foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
+from .contact import EDGES, POINTS, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 from .flight import ballistic_base, flight_functions
+from .nlp import JumpNLP
 from .phases import Phases
 from .robot import JumpRobot
-from .solve import JumpSolution
 
-__all__ = ["trajectory", "balanced_edge_weights"]
+__all__ = ["trajectory", "corrected_edge_weights"]
 
 SAGITTAL = [0, 2, 4]
 
 
-def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, sol: JumpSolution, rate_hz: float = 1000.0) -> dict:
-    """Arrays on a 1 kHz grid and at the contact nodes (module doc)."""
-    nlp, ph = sol.nlp, phases
-    parts = nlp.variables.unpack(sol.w)
+def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, nlp: JumpNLP, w: np.ndarray,
+               rate_hz: float = 1000.0) -> dict:
+    """Arrays of solution ``w`` of ``nlp`` on a 1 kHz grid and at the contact nodes (module doc)."""
+    ph = phases
+    parts = nlp.variables.unpack(w)
     sp_, sps, spl = nlp.splines
-    P = nlp.control_points(sol.w)
+    P = nlp.control_points(w)
     model = robot.sym.model
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
     X, Xd, Xdd = (sp_.evaluate(P, t, k) for k in range(3))
@@ -55,26 +56,32 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, sol: JumpSoluti
     E = robot.E
     Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in ((q7, m.y), (v6, m.yd), (a6, m.ydd)))
 
-    # contact forces: node weights interpolated, then balanced (module doc)
+    # contact forces: the NLP's edge weights at its nodes and samples, balanced between them (module doc)
     grid, W, mu = nlp.grid, robot.weight, robot.mu
-    lam_nodes = parts["lam"].T  # 6 x contact nodes, body weights
-    nS = len(grid["stance"])
+    lam_nodes = parts["lam"]  # contact nodes x 6, body weights
     node_t = np.concatenate([grid["stance"], grid["land"]])
-    lam_t = np.zeros((len(t), 6))
-    for mask, cols, tn in ((st, slice(0, nS), grid["stance"]), (la, slice(nS, None), grid["land"])):
-        for j in range(6):
-            lam_t[mask, j] = np.interp(t[mask], tn, lam_nodes[j, cols])
+    knot_t = np.concatenate([node_t, nlp.selection.contact])
+    knot_lam = np.vstack([lam_nodes, parts["lam_sample"]])
+    order = np.argsort(knot_t, kind="stable")
+    knot_t, knot_lam = knot_t[order], knot_lam[order]
+    lam_t = np.zeros((len(t), EDGES))
+    on_knot = np.zeros(len(t), bool)
+    for mask, inside in ((st, knot_t <= ph.takeoff + 1e-9), (la, knot_t >= ph.touchdown - 1e-9)):
+        for j in range(EDGES):
+            lam_t[mask, j] = np.interp(t[mask], knot_t[inside], knot_lam[inside, j])
+        near = np.abs(t[mask, None] - knot_t[inside][None, :]) < 1e-7
+        on_knot[np.flatnonzero(mask)[near.any(axis=1)]] = True
     data = model.createData()
     tau = np.zeros((len(t), model.nv - 6))
-    forces, wrench = np.zeros((len(t), 3, 2)), np.zeros((len(t), 6))
-    correction, P_feet = np.zeros(len(t)), np.zeros((len(t), 3, 3))
-    loaded = np.column_stack([ph.loaded(p, t) & (st | la) for p in ("heel", "ball", "toe")])
+    forces, wrench = np.zeros((len(t), len(POINTS), 2)), np.zeros((len(t), 6))
+    correction, P_feet = np.zeros(len(t)), np.zeros((len(t), 3, len(POINTS)))
+    loaded = np.column_stack([ph.loaded(p, t) & (st | la) for p in POINTS])
     for i in range(len(t)):
         full = pin.rnea(model, data, Q[i], V[i], A[i])
         if st[i] or la[i]:
             C = generator_columns(point_jacobians(model, data, Q[i], robot.geom), mu) * W
-            lam_new = balanced_edge_weights(C, full, lam_t[i], np.repeat(loaded[i], 2), robot.limits.tau_min,
-                                            robot.limits.tau_max)
+            free = np.repeat(loaded[i], 2)
+            lam_new = lam_t[i] if on_knot[i] else corrected_edge_weights(C, full, lam_t[i], free)
             correction[i] = float(np.max(np.abs(lam_new - lam_t[i])))
             lam_t[i] = lam_new
             full = full - C @ lam_new
@@ -82,6 +89,7 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, sol: JumpSoluti
             P_feet[i] = foot_points(model, data, robot.geom)
             wrench[i] = np.array(toe_wrench(lam_new * W, P_feet[i], mu)).ravel()
         tau[i] = full[6:]
+    lam_nodes = lam_nodes.T
     node_w = np.zeros((len(node_t), 6))
     for j, tj in enumerate(node_t):
         i = int(np.argmin(np.abs(t - tj)))
@@ -91,41 +99,27 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, sol: JumpSoluti
             "loaded": loaded.astype(np.int8), "sigma2": sigma2, "latent": X, "control_points": P,
             "node_t": node_t, "node_wrench": node_w, "node_lambda": lam_nodes.T,
             "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
-            "contact_points": np.array(["heel", "ball", "toe"]), "heel_offset": robot.geom.heel_offset,
+            "contact_points": np.array(POINTS), "heel_offset": robot.geom.heel_offset,
+            "pad_offset": robot.geom.pad_offset,
             "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,
             "tau_min": robot.limits.tau_min, "tau_max": robot.limits.tau_max, "friction": mu,
             "model": model.saveToString()}
 
 
-def balanced_edge_weights(C: np.ndarray, tau: np.ndarray, lam0: np.ndarray, free: np.ndarray,
-                          tau_min: np.ndarray, tau_max: np.ndarray) -> np.ndarray:
-    """Friction-pyramid edge weights nearest ``lam0`` whose generalized force ``C lam`` balances the
-    sagittal base rows of ``tau = rnea(q, v, a)`` exactly: first with ``lam >= 0``, unloaded edges
-    (``free`` False) zero and the joint torques in ``[tau_min, tau_max]``; then without the torque
-    limits; last the least-norm change of the loaded edges (which may leave the cone)."""
-    Cr, r = C[SAGITTAL], tau[SAGITTAL]
-    scale = max(float(np.max(np.abs(Cr))), 1e-9)
-    act = tau_max - tau_min > 1e-6
-    Cj, tj = C[6:][act], tau[6:][act]
-    x0 = np.clip(np.where(free, lam0, 0.0), 0.0, None)
-    for with_torque in (True, False):
-        cons = [{"type": "eq", "fun": lambda x: (Cr[:, free] @ x - r) / scale, "jac": lambda x: Cr[:, free] / scale}]
-        if with_torque:
-            lo, hi = tj - tau_max[act], tj - tau_min[act]
-            cons.append({"type": "ineq", "fun": lambda x: np.concatenate([hi - Cj[:, free] @ x, Cj[:, free] @ x - lo]),
-                         "jac": lambda x: np.vstack([-Cj[:, free], Cj[:, free]])})
-        res = minimize(lambda x: float(np.sum((x - x0[free]) ** 2)), x0[free], jac=lambda x: 2 * (x - x0[free]),
-                       bounds=[(0.0, None)] * int(free.sum()), constraints=cons, method="SLSQP",
-                       options={"maxiter": 200, "ftol": 1e-12})
-        x = np.maximum(res.x, 0.0)
-        ok = np.max(np.abs(Cr[:, free] @ x - r)) <= 1e-8 * scale
-        if with_torque:
-            tq = tj - Cj[:, free] @ x
-            ok = ok and np.all(tq >= tau_min[act] - 1e-6) and np.all(tq <= tau_max[act] + 1e-6)
-        if res.success and ok:
-            lam = np.zeros(6)
-            lam[free] = x
-            return lam
+def corrected_edge_weights(C: np.ndarray, tau: np.ndarray, lam0: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """``lam0`` with its loaded (``free``) edges corrected, least norm, to balance the sagittal base
+    rows of ``tau = rnea(q, v, a)`` with the generalized forces ``C`` of the edges (nv x 8); the
+    unloaded edges zero; an edge the correction would push below zero held at zero (while three
+    edges are left to balance the rows)."""
     lam = np.where(free, lam0, 0.0)
-    lam[free] += np.linalg.lstsq(Cr[:, free], r - Cr @ lam, rcond=None)[0]
+    r = tau[SAGITTAL]
+    use = free.copy()
+    for _ in range(int(free.sum())):  # an edge pushed below zero is held at zero, the rest corrected again
+        Cr = C[SAGITTAL][:, use]
+        x = lam[use] + np.linalg.lstsq(Cr, r - Cr @ lam[use], rcond=None)[0]
+        if x.min() >= 0.0 or use.sum() <= 3:
+            lam[use] = x
+            return lam
+        worst = np.flatnonzero(use)[np.argmin(x)]
+        lam[worst], use[worst] = 0.0, False
     return lam

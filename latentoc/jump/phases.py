@@ -48,9 +48,10 @@ class Phases:
     heel_strike: float | None = None
 
     def loaded(self, point: str, t: np.ndarray) -> np.ndarray:
-        """Whether ``point`` ("heel", "ball" or "toe") may carry force at contact times ``t``."""
+        """Whether ``point`` ("heel", "ball", "toe" or "pad": the toes') may carry force at contact
+        times ``t``."""
         t = np.asarray(t, float)
-        if point == "toe" or self.heel_off is None:
+        if point in ("toe", "pad") or self.heel_off is None:
             return np.ones(t.shape, bool)
         off, strike = {"heel": (self.heel_off, self.heel_strike), "ball": (self.ball_off, self.ball_strike)}[point]
         return (t <= off + 1e-9) | (t >= strike - 1e-9)
@@ -97,7 +98,7 @@ def contact_schedule(model: pin.Model, tr: JumpTraining, geom: FootGeometry, tak
     H = np.zeros((len(tr.Q), 3))
     for i, q in enumerate(tr.Q):
         pin.framesForwardKinematics(model, d, q)
-        H[i] = foot_points(model, d, geom)[2]
+        H[i] = foot_points(model, d, geom)[2, :3]
     up = H - H[0] > CONTACT_HEIGHT
     n_hold = max(1, int(round(0.05 / (tr.t[1] - tr.t[0]))))
     out = {}

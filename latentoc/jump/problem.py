@@ -26,8 +26,7 @@ from ..problem import TUBE, Problem
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..solve import SOLVERS, Solution, apply_overrides, resolve_tube
 from ..spline import BSpline
-from .contact import FootGeometry, foot_points
-from .export import trajectory
+from .contact import POINTS, FootGeometry, foot_points
 from .phases import Phases, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
@@ -94,7 +93,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     geom = FootGeometry.from_standing(model, tr.Q[0])
     phases = training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
-    loaded = np.column_stack([phases.loaded(k, tr.t) for k in ("heel", "ball", "toe")])
+    loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits = estimate_training_dynamics(model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded,
                                         floor=torque_floor)
     X = gp.latent_trajectories()[0]
@@ -150,7 +149,7 @@ RANGES: dict[str, tuple[float | None, float | None, bool]] = {
     "mu": (0.0, None, True), "n_stance": (2, None, False), "n_flight": (2, None, False), "n_land": (2, None, False),
     "n_base_stance": (4, None, False), "n_base_land": (4, None, False), "foot_tolerance": (0.0, None, False),
     "ball_tolerance": (0.0, None, False), "contact_tolerance": (0.0, None, False), "flight_substeps": (1, None, False),
-    "tube_spacing": (0.0, None, True), "wrench_spacing": (0.0, None, False), "exchange_tol": (0.0, None, True),
+    "tube_spacing": (0.0, None, True), "sample_spacing": (0.0, None, False),
     "exchange_rounds": (1, None, False)}
 
 
@@ -255,7 +254,8 @@ def solve_from_starts(solve: Callable[[dict | None], JumpSolution], warm: dict |
         sol, other = (cold, sol) if _better(cold.result, sol.result) else (sol, cold)
         ro = other.result
         sol.result["other_start"] = {"warm_start": ro["warm_start"],
-                                     **{k: ro[k] for k in ("status", "iterations", "solve_time_s", "distance")}}
+                                     "solve_time_s": ro["times"]["solve_s"],
+                                     **{k: ro[k] for k in ("status", "iterations", "distance")}}
     return sol
 
 
@@ -293,11 +293,13 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     t1 = time.perf_counter()
     blocks = js.blocks(robot)
     compile_time = time.perf_counter() - t1
-    sol = solve_from_starts(lambda warm: solve_jump(robot, layer, blocks, js.phases, s, js.init, warm=warm,
+    sol = solve_from_starts(lambda warm: solve_jump(robot, layer, blocks, js.phases, s, js.init, js.model, warm=warm,
                                                     verbose=verbose),
                             usable_warm_start(warm_start, delta), o["sweep_starts"])
-    traj = trajectory(robot, layer, js.phases, sol)
-    checks = verify(js.model, traj, s.mu)
+    t2 = time.perf_counter()
+    traj = sol.trajectory
+    checks = verify(js.model, traj, s.mu, checked=sol.series)
+    verify_time = time.perf_counter() - t2
     r = sol.result
     r.update({"problem": problem.name, "kind": problem.kind, "method": "latent", "tube_spec": problem.tube,
               "distance_initial": js.distance_training,
@@ -306,6 +308,9 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
               "tube_relative": delta * js.gpdm.beta[2], "latent_dim": js.gpdm.latent_dim,
               "max_sigma2": float(np.max(traj["sigma2"])), "control_points": s.n_control,
               "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
+              "build_time_s": sol.result["times"]["build_s"], "solve_time_s": sol.result["times"]["solve_s"],
+              "check_time_s": sol.result["times"]["check_s"] + verify_time,
+
               **js.gpdm.learning_summary(),
               "cost_initial": js.distance_training, "cost": r["distance"],
               "cost_meaning": "jump distance of the toe tip in metres (maximised, Eq. 33)",

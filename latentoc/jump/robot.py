@@ -14,7 +14,7 @@ import numpy as np
 
 from ..dynamics import SymbolicModel
 from .base import base_function
-from .contact import FootGeometry, joint_embedding, points_function
+from .contact import POINTS, FootGeometry, joint_embedding, points_function
 from .torque_limits import TrainingDynamics
 from .training import RIGHT_TOE, TOE
 from .zmp import G
@@ -92,8 +92,8 @@ class JumpRobot:
         return ca.vertcat(q7, E @ y), ca.vertcat(v6, E @ yd), ca.vertcat(a6, E @ ydd)
 
     def points(self, q, shift):
-        """World heel, ball and toe (3 x 3 columns) of pose q moved by the base translation (x, z)."""
-        return points_function(self.sym, self.geom)(q) + ca.repmat(ca.vertcat(shift[0], 0, shift[1]), 1, 3)
+        """World heel, ball, toe and pad (3 x 4 columns) of pose q moved by the base translation (x, z)."""
+        return points_function(self.sym, self.geom)(q) + ca.repmat(ca.vertcat(shift[0], 0, shift[1]), 1, len(POINTS))
 
     def torque_rows(self, tau_joint):
         """Torques of the active joints (N m; the NLP scales them by the limit range)."""

@@ -23,9 +23,8 @@ class JumpSettings:
     contact_tolerance: float = 0.01  # m a loaded heel or ball stays within this of the ground
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     tube_spacing: float = 0.005  # s between tube points
-    wrench_spacing: float = 0.005  # s between wrench samples (0: none)
+    sample_spacing: float = 0.005  # s between the contact and flight samples of phase 2 (0: none)
     exchange: bool = True  # sampled rows grow where the 1 kHz grid is violated (:mod:`.exchange`)
-    exchange_tol: float = 1e-3  # body weights, torque-limit ranges: the 1 kHz grid's allowed violation
     exchange_rounds: int = 8
     torque_limits: bool = True  # Eq. 34
     polygon: bool = True  # Eq. 35-36 in the landing

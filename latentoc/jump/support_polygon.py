@@ -22,6 +22,13 @@ def polygon_from_vertices(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return n, -np.sum(n * V, axis=1)
 
 
+def feet_polygon(heel_l: np.ndarray, toe_l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A_S, b_S of the symmetric feet's polygon from the left heel and toe (x, y), edges in the NLP's
+    order (:func:`symbolic_rows`: heel_R -> toe_R, the front, toe_L -> heel_L, the back)."""
+    (hx, hy), (tx, ty) = heel_l[:2], toe_l[:2]
+    return polygon_from_vertices(np.array([[hx, -hy], [tx, -ty], [tx, ty], [hx, hy]]))
+
+
 def support_polygon(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A_S, b_S of the convex hull of ground points (n x 2 or n x 3, z ignored)."""
     P = np.asarray(points, float)[:, :2]

@@ -22,13 +22,13 @@ from scipy.optimize import nnls
 
 from ..spline import BSpline
 from .base import base_to_freeflyer
-from .contact import MU, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
+from .contact import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
 from .training import JumpTraining
 
 
 @dataclass
 class TrainingDynamics:
-    """Training inverse dynamics: torques (n, nv - 6), forces (n, 3 points, 2), residual (n, 6)."""
+    """Training inverse dynamics: torques (n, nv - 6), forces (n, 4 points, 2), residual (n, 6)."""
 
     t: np.ndarray
     tau: np.ndarray
@@ -55,24 +55,25 @@ def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: F
                                floor: float = 0.0) -> TrainingDynamics:
     """Least-squares (NNLS) contact forces and joint torques of the training motion.
 
-    ``loaded`` (n frames x 3: heel, ball, toe) marks the points that may push; default all.
+    ``loaded`` (n frames x 4: heel, ball, toe, pad) marks the points that may push; default all.
     Each loaded joint's range is widened by ``max(margin * peak, floor)`` on both sides."""
     E = joint_embedding(smap)
     Q, V, A = smoothed_motion(tr, E, n_control)
     d = model.createData()
     G = generator_matrix(mu)
     n = len(Q)
-    taus, forces, res = np.zeros((n, model.nv - 6)), np.zeros((n, 3, 2)), np.zeros((n, 6))
+    npt = len(POINTS)
+    taus, forces, res = np.zeros((n, model.nv - 6)), np.zeros((n, npt, 2)), np.zeros((n, 6))
     for i in range(n):
         tau = pin.rnea(model, d, Q[i], V[i], A[i])
         if in_contact[i]:
             Acols = generator_columns(point_jacobians(model, d, Q[i], geom), mu)
             rows = [0, 2, 4]
-            cols = np.repeat(np.ones(3, bool) if loaded is None else np.asarray(loaded[i], bool), 2)
-            lam = np.zeros(6)
+            cols = np.repeat(np.ones(npt, bool) if loaded is None else np.asarray(loaded[i], bool), 2)
+            lam = np.zeros(2 * npt)
             lam[cols] = nnls(Acols[rows][:, cols], tau[rows])[0]
             gf = Acols @ lam
-            forces[i] = (G @ lam.reshape(3, 2).T).T
+            forces[i] = (G @ lam.reshape(npt, 2).T).T
         else:
             gf = np.zeros(model.nv)
         res[i] = tau[:6] - gf[:6]

@@ -3,16 +3,20 @@
 * ``P``: the free latent control points (the end points stay on the training path);
 * ``base_stance``, ``base_land``: the (x, z, pitch) base splines of the contact phases;
 * ``x_L``: the landing toe tip's ground point (the jump distance, Eq. 33);
-* ``lam``: friction-pyramid edge weights at the contact nodes (heel, ball, toe; body weights);
+* ``lam``: friction-pyramid edge weights at the contact nodes (heel, ball, toe, pad; body weights);
 * ``lam_impact``: the touchdown impulse's edge weights (0.1 s of body weight);
 * ``c_to``, ``cd_to``, ``L_to``: the takeoff COM position, velocity and angular momentum;
-* ``pitch_flight``: the base pitch at the flight nodes.
+* ``pitch_flight``: the base pitch at the flight nodes;
+* ``lam_sample``: the contact samples' edge weights (:mod:`.selection`);
+* ``flight_sample``: the flight samples' pitch rate and base accelerations (pd, ax, az, pdd).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+
+from .contact import EDGES
 
 __all__ = ["JumpVariables"]
 
@@ -33,10 +37,11 @@ class JumpVariables:
 
     @classmethod
     def layout(cls, n_control: int, d: int, n_base_stance: int, n_base_land: int, n_contact: int,
-               n_flight: int) -> "JumpVariables":
+               n_flight: int, n_contact_samples: int = 0, n_flight_samples: int = 0) -> "JumpVariables":
         return cls({"P": (n_control - 2, d), "base_stance": (n_base_stance, 3), "base_land": (n_base_land, 3),
-                    "x_L": (1,), "lam": (n_contact, 6), "lam_impact": (6,), "c_to": (2,), "cd_to": (2,),
-                    "L_to": (1,), "pitch_flight": (n_flight,)})
+                    "x_L": (1,), "lam": (n_contact, EDGES), "lam_impact": (EDGES,), "c_to": (2,), "cd_to": (2,),
+                    "L_to": (1,), "pitch_flight": (n_flight,), "lam_sample": (n_contact_samples, EDGES),
+                    "flight_sample": (n_flight_samples, 4)})
 
     def index(self, name: str) -> np.ndarray:
         """Positions in w of block ``name``, in its shape."""

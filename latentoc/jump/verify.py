@@ -1,8 +1,8 @@
 """Post-check of a jump on a 1 kHz grid with numeric Pinocchio (issue 6 verification).
 
 From exported arrays only (``t``, ``q``, ``v``, ``a``, ``wrench`` = the per-foot contact
-wrench at the toe tip, world-aligned, on the 1 kHz grid, optionally ``point_forces`` (n, 3, 2):
-the left heel, ball and toe (fx, fz), each acting on its own body, mirrored on the right
+wrench at the toe tip, world-aligned, on the 1 kHz grid, optionally ``point_forces`` (n, 4, 2):
+the left heel, ball, toe and pad (fx, fz), each acting on its own body, mirrored on the right
 foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
 ``tau_min``/``tau_max``, ``sigma2``, the heel offset and the landing/settle times):
 
@@ -15,7 +15,7 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
 * the wrench the motion *needs*: the 3 sagittal base rows solved for (fx, fz, my) of
   each (symmetric) foot; from it the minimum normal force, the maximum friction ratio
   |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe); with ``loaded``
-  (n, 3: whether the heel, ball and toe may carry force, the contact schedule) also
+  (n, 4: whether the heel, ball, toe and pad may carry force, the contact schedule) also
   ``cop_margin_loaded``, against the rearmost loaded point (the heel, else the ball, else a
   ``toe_pad`` behind the toe tip);
 * ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
@@ -40,7 +40,7 @@ import numpy as np
 import pinocchio as pin
 
 from .contact import TOE_PAD, FootGeometry, foot_points, point_jacobians
-from .support_polygon import margin, support_polygon
+from .support_polygon import feet_polygon
 from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
 
@@ -55,8 +55,13 @@ def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return w
 
 
-def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE_PAD) -> dict:
-    """Verification numbers (see module docstring)."""
+def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE_PAD) -> dict[str, np.ndarray]:
+    """The hard constraints' slack at every sample (negative: violated), and what :func:`verify`
+    sums up (module doc): ``torque`` (n, joints with a range; N m to the nearer limit), ``normal``
+    (needed fz, N), ``friction`` (mu fz - |fx|, N), ``cop`` (m inside the loaded support),
+    ``point_cone`` (N, over the exported point forces), ``zmp`` and ``com`` (n, 4: m inside each
+    edge of the support polygon, :func:`~.support_polygon.feet_polygon`), each NaN where it does
+    not apply (flight; ZMP before touchdown, COM before settling)."""
     t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
     Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)
     heel_off = np.asarray(arrays["heel_offset"])
@@ -64,19 +69,18 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     tmin, tmax = np.asarray(arrays["tau_min"]), np.asarray(arrays["tau_max"])
     d = model.createData()
     mass = sum(i.mass for i in model.inertias)
-    W = mass * G
     ids = {n: model.getFrameId(n) for n in (TOE, RIGHT_TOE)}
-    res_max, lat_max, tau_viol, sym_tau, flight_res = 0.0, 0.0, 0.0, 0.0, 0.0
-    fz_min, ratio_max, cop_margin = np.inf, 0.0, np.inf
-    zmp_margin, com_margin = np.inf, np.inf
     act = tmax - tmin > 1e-6
     points = np.asarray(arrays["point_forces"]) if "point_forces" in arrays else None
-    geom, cone = FootGeometry(heel_off), 0.0
+    geom = FootGeometry(heel_off, np.asarray(arrays["pad_offset"]))
     loaded = np.asarray(arrays["loaded"]).astype(bool) if "loaded" in arrays else None
-    cop_loaded = np.inf
-    feet_speed = np.zeros(len(t))
-    toe_xz = np.zeros((len(t), 2))
-    for i in range(len(t)):
+    n = len(t)
+    nan = np.full(n, np.nan)
+    out = {"torque": np.zeros((n, int(act.sum()))), "residual": np.zeros(n), "lateral": np.zeros(n),
+           "symmetric_torque": np.zeros(n), "feet_speed": np.zeros(n), "toe_xz": np.zeros((n, 2)),
+           **{k: nan.copy() for k in ("normal", "friction", "cop", "cop_loaded", "point_cone")},
+           "zmp": np.full((n, 4), np.nan), "com": np.full((n, 4), np.nan)}
+    for i in range(n):
         q, v, a = Q[i], V[i], A[i]
         tau = pin.rnea(model, d, q, v, a)
         with_points = contact[i] and points is not None
@@ -87,64 +91,85 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
             pin.framesForwardKinematics(model, d, q)
         JL = pin.getFrameJacobian(model, d, ids[TOE], pin.LOCAL_WORLD_ALIGNED)
         JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
-        feet_speed[i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
-        toe_xz[i] = d.oMf[ids[TOE]].translation[[0, 2]]
+        out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
+        out["toe_xz"][i] = d.oMf[ids[TOE]].translation[[0, 2]]
         if not contact[i]:
             gen = np.zeros(model.nv)
         elif with_points:  # each point force on its own body (heel, ball: foot; toe: toes)
-            gen = sum(Jp[k].T @ np.array([points[i, k, 0], 0.0, points[i, k, 1]]) for k in range(3))
-            cone = max(cone, float(np.max(np.abs(points[i, :, 0]) - mu * points[i, :, 1])) / W)
+            gen = sum(Jp[k].T @ np.array([points[i, k, 0], 0.0, points[i, k, 1]]) for k in range(len(Jp)))
+            cone = mu * points[i, :, 1] - np.abs(points[i, :, 0])  # of the loaded points (the others carry 0)
+            out["point_cone"][i] = float(np.min(cone[loaded[i]] if loaded is not None and loaded[i].any() else cone))
         else:
             gen = (JL + JR).T @ Wr[i]
         r = tau[:6] - gen[:6]
-        res_max = max(res_max, float(np.max(np.abs(r))) / W)
-        if not contact[i]:
-            flight_res = max(flight_res, float(np.max(np.abs(r))) / W)
-        lat_max = max(lat_max, float(np.max(np.abs(r[[1, 3, 5]]))) / W)
+        out["residual"][i] = float(np.max(np.abs(r)))
+        out["lateral"][i] = float(np.max(np.abs(r[[1, 3, 5]])))
         tj = tau[6:] - gen[6:]
-        tau_viol = max(tau_viol, float(np.max(np.maximum(tmin[act] - tj[act], 0) + np.maximum(tj[act] - tmax[act], 0))))
-        sym_tau = max(sym_tau, float(np.max(np.abs(tj[~act]))) if (~act).any() else 0.0)
+        out["torque"][i] = np.minimum(tj[act] - tmin[act], tmax[act] - tj[act])
+        out["symmetric_torque"][i] = float(np.max(np.abs(tj[~act]))) if (~act).any() else 0.0
         if not contact[i]:
             continue
         # the wrench the motion needs: solve the sagittal base rows for (fx, fz, my)
         fx, _, fz, _, my, _ = sagittal_contact_wrench(JL + JR, tau)
-        fz_min = min(fz_min, fz)
-        ratio_max = max(ratio_max, abs(fx) / max(fz, 1e-9))
-        heel, ball, toe = foot_points(model, d, geom).T
-        cop = toe[0] - my / max(fz, 1e-9)
-        cop_margin = min(cop_margin, min(cop - heel[0], toe[0] - cop))
+        out["normal"][i], out["friction"][i] = fz, mu * fz - abs(fx)
+        heel, ball, toe, _ = foot_points(model, d, geom).T
+        cop = toe[0] - (my + toe[2] * fx) / max(fz, 1e-9)  # on the ground, below the toe tip
+        out["cop"][i] = min(cop - heel[0], toe[0] - cop)
         if loaded is not None:  # the rearmost loaded point: heel, ball or the toe pad
             back = heel[0] if loaded[i, 0] else (ball[0] if loaded[i, 1] else toe[0] - toe_pad)
-            cop_loaded = min(cop_loaded, min(cop - back, toe[0] - cop))
+            out["cop_loaded"][i] = min(cop - back, toe[0] - cop)
         if t[i] >= t_td - 1e-9:
-            pts = np.array([heel, toe, heel * [1, -1, 1], toe * [1, -1, 1]])
-            As, bs = support_polygon(pts)
+            As, bs = feet_polygon(heel, toe)
             c = pin.centerOfMass(model, d, q)
             dh = pin.computeCentroidalMomentumTimeVariation(model, d, q, v, a).vector
-            zmp_margin = min(zmp_margin, margin(As, bs, np.array(zmp(c, dh, mass))))
+            out["zmp"][i] = -(As @ np.array(zmp(c, dh, mass)) + bs)
             if t[i] >= t_settle - 1e-9:
-                com_margin = min(com_margin, margin(As, bs, c))
+                out["com"][i] = -(As @ c[:2] + bs)
+    return out
+
+
+def _min(x: np.ndarray) -> float:
+    return float(np.nanmin(x)) if np.isfinite(x).any() else np.inf
+
+
+def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE_PAD,
+           checked: dict[str, np.ndarray] | None = None) -> dict:
+    """Verification numbers (module doc); ``checked``: :func:`series` of the same arrays, if made."""
+    sr = series(model, arrays, mu, toe_pad) if checked is None else checked
+    t = np.asarray(arrays["t"])
+    contact = np.asarray(arrays["contact"]).astype(bool)
+    W = sum(i.mass for i in model.inertias) * G
+    fz_min = _min(sr["normal"])
+    out = {"max_dynamics_residual": float(sr["residual"].max(initial=0.0)) / W,
+           "max_flight_residual": float(sr["residual"][~contact].max(initial=0.0)) / W,
+           "max_lateral_residual": float(sr["lateral"].max(initial=0.0)) / W,
+           "min_normal_force": fz_min,
+           "max_friction_ratio": float(np.nanmax(np.where(contact, mu - sr["friction"] / np.maximum(sr["normal"], 1e-9),
+                                                          -np.inf), initial=0.0)),
+           "cop_margin": _min(sr["cop"]), "zmp_margin": _min(sr["zmp"]), "com_margin": _min(sr["com"]),
+           "max_torque_violation": float(max(0.0, -sr["torque"].min(initial=0.0))),
+           "max_point_cone_violation": float(max(0.0, -_min(sr["point_cone"]))) / W if np.isfinite(sr["point_cone"]).any() else 0.0,
+           "max_symmetric_torque": float(sr["symmetric_torque"].max(initial=0.0))}
+    Wr = np.asarray(arrays["wrench"])
     node_mis = 0.0
     if "node_wrench" in arrays and "node_t" in arrays:
         for tn, wn in zip(np.asarray(arrays["node_t"]), np.asarray(arrays["node_wrench"])):
             i = int(np.argmin(np.abs(t - tn)))
             if contact[i]:
                 node_mis = max(node_mis, float(np.max(np.abs(wn - Wr[i]))) / W)
-    out = {"max_dynamics_residual": res_max, "max_flight_residual": flight_res,
-           "max_node_wrench_mismatch": node_mis, "max_lateral_residual": lat_max,
-           "min_normal_force": float(fz_min), "max_friction_ratio": ratio_max, "cop_margin": float(cop_margin),
-           "zmp_margin": float(zmp_margin), "com_margin": float(com_margin),
-           "max_torque_violation": tau_viol, "max_point_cone_violation": cone, "max_symmetric_torque": sym_tau}
+    out["max_node_wrench_mismatch"] = node_mis
     # Eq. 33: the integral of the feet's ground-projected speed, both toe tips (trapezoid rule)
-    out["eq33_feet_distance"] = float(np.sum(0.5 * (feet_speed[1:] + feet_speed[:-1]) * np.diff(t)))
+    fs, toe_xz = sr["feet_speed"], sr["toe_xz"]
+    out["eq33_feet_distance"] = float(np.sum(0.5 * (fs[1:] + fs[:-1]) * np.diff(t)))
     out["toe_displacement"] = float(toe_xz[-1, 0] - toe_xz[0, 0])
     out["toe_slip"], out["max_toe_height"] = 0.0, 0.0
+    t_td = float(arrays["touchdown"])
     for phase in (contact & (t < t_td - 1e-9), contact & (t >= t_td - 1e-9)):
         if phase.any():
             out["toe_slip"] = max(out["toe_slip"], float(np.ptp(toe_xz[phase, 0])))
             out["max_toe_height"] = max(out["max_toe_height"], float(np.max(np.abs(toe_xz[phase, 1]))))
-    if loaded is not None:
-        out["cop_margin_loaded"] = float(cop_loaded)
+    if "loaded" in arrays:
+        out["cop_margin_loaded"] = _min(sr["cop_loaded"])
     if "sigma2" in arrays:
         out["max_sigma2"] = float(np.max(arrays["sigma2"]))
     return out

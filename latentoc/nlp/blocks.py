@@ -32,7 +32,7 @@ import numpy as np
 from ..progress import bar
 from . import jit
 
-__all__ = ["RobotBlock", "block_inputs", "compile_blocks"]
+__all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks"]
 
 # bump when the derivative Functions made from the same rows change: the cache index keys on it
 BLOCK_VERSION = "2"
@@ -52,21 +52,23 @@ class RobotBlock:
     rows_sx: ca.Function  # (y, yd, ydd, r) -> F, SX
     latent_dim: int
     layout: dict[str, slice] = field(default_factory=dict)  # named row ranges of F
+    hot: bool = True  # evaluated at many nodes every iteration: compiled for speed (:func:`jit.flags_for`)
     functions: dict[str, ca.Function] = field(default_factory=dict, repr=False)
     instructions: dict[str, int] = field(default_factory=dict, repr=False)  # of the compiled pieces
     _maps: dict = field(default_factory=dict, repr=False)
 
     @classmethod
     def from_parts(cls, name: str, inputs: tuple[ca.SX, ca.SX, ca.SX, ca.SX], parts: dict[str, ca.SX],
-                   latent_dim: int) -> "RobotBlock":
-        """A block whose rows are the named ``parts`` stacked in order."""
+                   latent_dim: int, hot: bool = True) -> "RobotBlock":
+        """A block whose rows are the named ``parts`` stacked in order; ``hot``: evaluated at many
+        nodes every iteration (else at one, e.g. a phase transition)."""
         layout, off = {}, 0
         for key, e in parts.items():
             layout[key] = slice(off, off + e.numel())
             off += e.numel()
         F = ca.vertcat(*[ca.vec(e) for e in parts.values()])
         fn = ca.Function(name, list(inputs), [F], ["y", "yd", "ydd", "r"], ["F"])
-        return cls(name, fn, int(latent_dim), layout)
+        return cls(name, fn, int(latent_dim), layout, hot)
 
     @property
     def output_dim(self) -> int:
@@ -115,17 +117,57 @@ class RobotBlock:
             self.functions.update(self.derivative_functions((which,)))
         return self.functions[which]
 
-    def mapped(self, which: str, K: int) -> ca.Function:
+    def mapped(self, which: str, K: int) -> "MappedCall":
+        """Piece ``which`` mapped over K nodes, called on numpy arrays (:class:`MappedCall`)."""
         key = (which, K)
         if key not in self._maps:
-            self._maps[key] = jit.node_map(self.function(which), K, self.instructions.get(which, 0))
+            self._maps[key] = MappedCall(jit.node_map(self.function(which), K, self.instructions.get(which, 0)))
         return self._maps[key]
+
+
+class MappedCall:
+    """A Function evaluated in place on numpy arrays through CasADi's buffers: no DM is made.
+
+    Arguments are the inputs' dense data in CasADi's column-major order (for a mapped block's
+    D x K input: the K x D array, node by node); results are the outputs' dense data in the same
+    order, each a new array."""
+
+    def __init__(self, f: ca.Function):
+        self.f = f
+        self._buf, self._eval = f.buffer()
+        self._args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        for i, a in enumerate(self._args):
+            if f.sparsity_in(i).nnz() != f.numel_in(i):
+                raise ValueError(f"{f.name()}: input {i} is not dense")
+            self._buf.set_arg(i, memoryview(a))
+        self._res, self._scatter = [], []
+        for i in range(f.n_out()):
+            sp = f.sparsity_out(i)
+            nz = np.zeros(sp.nnz())
+            self._buf.set_res(i, memoryview(nz))
+            rows, cols = np.array(sp.get_triplet()[0], np.int64), np.array(sp.get_triplet()[1], np.int64)
+            dense = sp.nnz() == sp.numel()
+            self._res.append(nz)
+            self._scatter.append(None if dense else (cols * sp.size1() + rows, sp.numel()))
+
+    def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
+        for a, v in zip(self._args, args):
+            a[:] = np.ravel(v)
+        self._eval()
+        out = []
+        for nz, sc in zip(self._res, self._scatter):
+            if sc is None:
+                out.append(nz.copy())
+            else:
+                full = np.zeros(sc[1])
+                full[sc[0]] = nz
+                out.append(full)
+        return out
 
 
 def _index_file(block: RobotBlock) -> Path:
     key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, ca.__version__,
-                     str(jit.compiler()), *jit.JIT_FLAGS, *jit.LARGE_FLAGS,
-                     str(jit.LARGE_FUNCTION)])
+                     str(jit.compiler()), str(block.hot), *jit.JIT_FLAGS, *jit.ONCE_FLAGS, str(jit.LARGE_FUNCTION)])
     return jit.cache_dir() / f"rb_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
 
 
@@ -162,7 +204,7 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
             for f in fns[b.name].values():
                 gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
                 gen.add(f)
-                futures[b.name].append(cc.submit(f.name(), gen.dump(), jit.flags_for(f)))
+                futures[b.name].append(cc.submit(f.name(), gen.dump(), jit.flags_for(f, b.hot)))
     for b in todo:
         libs = [f.result() for f in futures[b.name]]
         if any(lib is None for lib in libs):
@@ -179,6 +221,5 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
 
 
 def stack_tangents(G: np.ndarray) -> np.ndarray:
-    """K x D x d tangents as the D x (K d) matrix a mapped block takes."""
-    K, D, d = G.shape
-    return np.ascontiguousarray(np.transpose(G, (1, 0, 2)).reshape(D, K * d))
+    """K x D x d tangents as the data of the D x (K d) matrix a mapped block takes (column-major)."""
+    return np.transpose(G, (0, 2, 1))

@@ -44,9 +44,10 @@ class BlockEvaluator:
             self._last = (Z.copy(), self.layer.motion(Z))
         return self._last[1]
 
+    # mapped blocks take and give their data column-major: a D x K input is the K x D array
     def _args(self, s: np.ndarray) -> list[np.ndarray]:
         m = self._motion(s)
-        return [m.y.T, m.yd.T, m.ydd.T, s[:, 3 * self.layer.latent_dim:].T]
+        return [m.y, m.yd, m.ydd, s[:, 3 * self.layer.latent_dim:]]
 
     def _tangents(self, s: np.ndarray) -> list[np.ndarray]:
         m = self._motion(s)
@@ -54,20 +55,19 @@ class BlockEvaluator:
 
     def values(self, s: np.ndarray) -> np.ndarray:
         K = s.shape[0]
-        return _dm(self.block.mapped("rows", K)(*self._args(s))).T
+        return self.block.mapped("rows", K)(*self._args(s))[0].reshape(K, self.n_out)
 
     def jacobian(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         K = s.shape[0]
         F, J = self.block.mapped("jac", K)(*self._args(s), *self._tangents(s))
-        J = _dm(J).reshape(self.n_out, K, self.n_in).transpose(1, 0, 2)
-        return _dm(F).T, J
+        return F.reshape(K, self.n_out), J.reshape(K, self.n_in, self.n_out).transpose(0, 2, 1)
 
     def hessian(self, s: np.ndarray, lam: np.ndarray) -> np.ndarray:
         K = s.shape[0]
-        H, mu = self.block.mapped("hess", K)(*self._args(s), *self._tangents(s), np.asarray(lam, float).T)
-        H = _dm(H).reshape(self.n_in, K, self.n_in).transpose(1, 0, 2).copy()
+        H, mu = self.block.mapped("hess", K)(*self._args(s), *self._tangents(s), np.asarray(lam, float))
+        H = H.reshape(K, self.n_in, self.n_in)  # symmetric: its transpose is itself
         nz = 3 * self.layer.latent_dim
-        H[:, :nz, :nz] += self.layer.curvature(s[:, :nz], _dm(mu).T)
+        H[:, :nz, :nz] += self.layer.curvature(s[:, :nz], mu.reshape(K, -1))
         return H
 
 

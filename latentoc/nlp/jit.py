@@ -23,15 +23,16 @@ from ..progress import bar
 
 __all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "threads", "node_map"]
 
-JIT_FLAGS = ("-O1",)
-# gcc's optimiser is superlinear on long straight-line code: past this size -O0 (docs/derivatives.md)
-LARGE_FUNCTION = 150_000
-LARGE_FLAGS = ("-O0",)
+JIT_FLAGS = ("-O1",)  # code evaluated at every Ipopt iteration over many nodes: half the time of -O0
+ONCE_FLAGS = ("-O0",)  # code whose evaluation costs little (one node): the quickest compile
+# gcc's optimiser is superlinear on long straight-line code: past this size -O0 even where it is hot
+LARGE_FUNCTION = 600_000
 
 
-def flags_for(f: ca.Function) -> tuple[str, ...]:
-    """Compiler flags for Function ``f``: -O1, or -O0 when it is large."""
-    return LARGE_FLAGS if f.n_instructions() > LARGE_FUNCTION else JIT_FLAGS
+def flags_for(f: ca.Function, hot: bool = True) -> tuple[str, ...]:
+    """Compiler flags for Function ``f``: -O1 when ``hot`` (evaluated at many nodes every
+    iteration) and not huge, else -O0 (docs/derivatives.md)."""
+    return JIT_FLAGS if hot and f.n_instructions() <= LARGE_FUNCTION else ONCE_FLAGS
 
 
 def cache_dir() -> Path:

@@ -1,9 +1,8 @@
 """The broad jump's row families, one per module, each a robot block (:mod:`latentoc.nlp.blocks`):
 a Function of the joint motion (y, yd, ydd) and the node's other inputs r, never of the GPDM.
 
-* :mod:`.contact` - a contact node: base rows = sum J^T f, torques, foot placement, ZMP, COM;
-* :mod:`.wrench` - a sample between contact nodes: the needed wrench in the loaded points' cone;
-* :mod:`.flight` - the flight's joint torques (at any time), foot clearance and pitch rate;
+* :mod:`.contact` - a contact node or sample: base rows = sum J^T f, torques, foot placement, ZMP, COM;
+* :mod:`.flight` - the flight's inverse dynamics (at any time), foot clearance and pitch rate;
 * :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact.
 
 Each module names its blocks' inputs r (sizes, in order) and builds them for latent dimension d.
@@ -28,13 +27,10 @@ def inputs(robot: JumpRobot, spec: dict[str, int]) -> tuple[tuple[ca.SX, ca.SX, 
     return sym, parts
 
 
-def row_blocks(robot: JumpRobot, d: int, wrench_samples: bool = True) -> dict[str, RobotBlock]:
+def row_blocks(robot: JumpRobot, d: int) -> dict[str, RobotBlock]:
     """Every row family's block for latent dimension d."""
-    from . import contact, flight, transitions, wrench
+    from . import contact, flight, transitions
 
-    blocks = {"contact": contact.block(robot, d), "flight_torque": flight.torque_block(robot, d),
-              "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
-              "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
-    if wrench_samples:
-        blocks["wrench"] = wrench.block(robot, d)
-    return blocks
+    return {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
+            "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
+            "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}

@@ -1,11 +1,13 @@
-"""The flight's rows (:mod:`latentoc.jump.flight`): joint torques, foot clearance, pitch rate.
+"""The flight's rows (:mod:`latentoc.jump.flight`): inverse dynamics, foot clearance, pitch rate.
 
-In flight the body falls freely about its COM, so the joint torques are those of the motion in
-the COM's free-falling frame: they depend on the joint motion and the pitch rate and its time
-derivative (from the conserved momentum L), not on the pitch itself nor on where the COM is.
-The torque block therefore takes (y, yd, ydd, L) and holds at any time of the flight (the
-exchange of :mod:`latentoc.jump.exchange` places it on the 1 kHz grid). The clearance block
-takes the pitch and the takeoff COM state to place the feet.
+In flight the body falls freely, so the joint torques do not depend on where the body is nor on
+its pitch: they are those of RNEA with the base at the origin, unpitched, turning at the pitch
+rate pd, and accelerating at (ax, az, pdd) such that the base rows of RNEA vanish (no external
+wrench; Crocoddyl's inverse-dynamics form). (pd, ax, az, pdd) are variables of each flight
+sample, tied to the conserved momentum by the pitch-rate block, so the torque block's
+derivatives hold no ballistic base; it can sit at any time of the flight (the exchange of
+:mod:`latentoc.jump.exchange` places it on the 1 kHz grid). The clearance block takes the
+pitch and the takeoff COM state to place the feet.
 """
 from __future__ import annotations
 
@@ -13,10 +15,10 @@ import casadi as ca
 
 from ...nlp.blocks import RobotBlock
 from ..flight import GRAVITY, flight_functions
-from ..robot import JumpRobot
+from ..robot import SAGITTAL_ROWS, JumpRobot
 from . import inputs
 
-TORQUE_INPUTS = {"L": 1}
+DYNAMICS_INPUTS = {"pd": 1, "acc": 3}  # pitch rate; base accelerations (x, z, pitch)
 CLEARANCE_INPUTS = {"p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1}
 PITCH_RATE_INPUTS = {"L": 1}
 
@@ -34,13 +36,15 @@ def flight_base(robot: JumpRobot, y, yd, ydd, p, L, c, cd):
     return fns["base"](y, yd, ydd, p, pd, pdd, c, cd, ca.DM(GRAVITY))
 
 
-def torque_block(robot: JumpRobot, d: int) -> RobotBlock:
-    """Joint torques of the ballistic motion, computed at zero pitch (they do not depend on it)."""
-    (y, yd, ydd, r), u = inputs(robot, TORQUE_INPUTS)
-    b, bd, bdd = flight_base(robot, y, yd, ydd, ca.DM(0.0), u["L"], ca.DM.zeros(2), ca.DM.zeros(2))
-    q, v, a = robot.configuration(b, bd, bdd, y, yd, ydd)
-    return RobotBlock.from_parts("jump_flight_torque", (y, yd, ydd, r),
-                                 {"torque": robot.torque_rows(robot.sym.rnea(q, v, a)[6:])}, d)
+def dynamics_block(robot: JumpRobot, d: int) -> RobotBlock:
+    """Free fall by inverse dynamics: the base rows of RNEA (body weights; zero in flight) and the
+    joint torques, at zero pitch and position (module doc)."""
+    (y, yd, ydd, r), u = inputs(robot, DYNAMICS_INPUTS)
+    q, v, a = robot.configuration(ca.DM.zeros(3), ca.vertcat(0, 0, u["pd"]), u["acc"], y, yd, ydd)
+    tau = robot.sym.rnea(q, v, a)
+    return RobotBlock.from_parts("jump_flight_dynamics", (y, yd, ydd, r),
+                                 {"flight_base": tau[SAGITTAL_ROWS] / robot.weight,
+                                  "torque": robot.torque_rows(tau[6:])}, d)
 
 
 def clearance_block(robot: JumpRobot, d: int) -> RobotBlock:

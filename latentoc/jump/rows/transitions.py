@@ -14,14 +14,14 @@ import casadi as ca
 
 from ...nlp.blocks import RobotBlock
 from ..base import base_function
-from ..contact import point_forces, point_generalized_force
+from ..contact import EDGES, point_forces, point_generalized_force
 from ..flight import flight_functions
 from ..robot import SAGITTAL_ROWS, JumpRobot
 from . import inputs
 from .flight import ballistic_com, flight_base
 
 TAKEOFF_INPUTS = {"b": 3, "bd": 3, "c_to": 2, "cd_to": 2, "L": 1, "p": 1}
-TOUCHDOWN_INPUTS = {"b": 3, "bd": 3, "p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1, "impulse": 6}
+TOUCHDOWN_INPUTS = {"b": 3, "bd": 3, "p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1, "impulse": EDGES}
 
 
 def takeoff_block(robot: JumpRobot, d: int) -> RobotBlock:
@@ -29,7 +29,7 @@ def takeoff_block(robot: JumpRobot, d: int) -> RobotBlock:
     b, bd = u["b"], u["bd"]
     c, cd, L = flight_functions(robot.sym, robot.smap)["momentum"](y, yd, b, bd)
     rows = ca.vertcat(c - u["c_to"], cd - u["cd_to"], L - u["L"], b[2] - u["p"])
-    return RobotBlock.from_parts("jump_takeoff", (y, yd, ydd, r), {"takeoff": rows}, d)
+    return RobotBlock.from_parts("jump_takeoff", (y, yd, ydd, r), {"takeoff": rows}, d, hot=False)
 
 
 def touchdown_block(robot: JumpRobot, d: int) -> RobotBlock:
@@ -46,4 +46,4 @@ def touchdown_block(robot: JumpRobot, d: int) -> RobotBlock:
     gen = point_generalized_force(robot.sym, robot.geom, q, point_forces(u["impulse"] * W * 0.1, robot.mu))
     impact = Mbb @ (v_plus - v_minus) - gen[:6]
     return RobotBlock.from_parts("jump_touchdown", (y, yd, ydd, r),
-                                 {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W}, d)
+                                 {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W}, d, hot=False)
