@@ -1,8 +1,12 @@
-"""Where latentoc's data folders (``robots/``, ``problems/``) are, in a checkout or a wheel."""
+"""Where latentoc's folders are: its data (``robots/``, ``problems/``, in a checkout or a wheel) and
+its on-disk cache (compiled libraries, learned GPDMs)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+
+__all__ = ["data_dir", "cache_dir"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -13,3 +17,12 @@ def data_dir(name: str) -> Path:
         if candidate.is_dir():
             return candidate
     raise FileNotFoundError(f"latentoc data folder {name!r} not found next to {_PACKAGE}")
+
+
+def cache_dir() -> Path:
+    """The cache folder: ``$LATENTOC_CACHE``, else ``$XDG_CACHE_HOME/latentoc/jit`` or
+    ``~/.cache/latentoc/jit`` (compiled libraries; learned GPDMs in its ``gpdm/``)."""
+    if os.environ.get("LATENTOC_CACHE"):
+        return Path(os.environ["LATENTOC_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "latentoc" / "jit"

@@ -233,9 +233,9 @@ def test_identity_layer_bad_shapes(call, name):
 def test_blas_threads_restored(small_layer):
     """The layer runs OpenBLAS on one thread and gives the caller's thread count back, also
     after an error."""
-    from latentoc.gpdm.learning import _openblas_handles
+    from latentoc.threads import openblas_handles
 
-    handles = _openblas_handles()
+    handles = openblas_handles()
     if not handles:
         pytest.skip("no OpenBLAS found")
     before = [int(get()) for get, _ in handles]

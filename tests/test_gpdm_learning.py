@@ -10,7 +10,8 @@ from gpdm_reference import aligned_difference, central_hessian, decrement, model
 
 from latentoc.benchmarks.gpdm_bench import synthetic_motion
 from latentoc.gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
-from latentoc.gpdm.learning import learning_problem, pca_initialization, roughness
+from latentoc.gpdm.learning import learning_problem, roughness
+from latentoc.gpdm.start import pca_initialization
 from latentoc.gpdm.objective import HYPER_NAMES, neg_log_posterior, pack
 
 

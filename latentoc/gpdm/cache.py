@@ -1,7 +1,7 @@
 """Learned GPDMs kept on disk: learning converges (:mod:`latentoc.gpdm.newton`), so the same data and
 settings give the same model, and a problem learns its model once per machine, not per process.
 
-Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.nlp.jit.cache_dir`), the key a
+Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.paths.cache_dir`), the key a
 hash of the learner's version, the training sequences and the settings. The package ships the
 models of its larger problems (the broad jump's: 5 s to learn) under the same names in
 ``latentoc/models/``; tests/test_gpdm_cache.py checks each is a converged minimum of its data.
@@ -24,9 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from ..files import NPZ_ERRORS, atomic_write, sha256
-from ..nlp.jit import cache_dir
-from .learning import GPDMSettings, learn_gpdm
+from ..paths import cache_dir
+from .learning import learn_gpdm
 from .model import GPDM
+from .settings import GPDMSettings
 
 __all__ = ["LEARNER_VERSION", "SHIPPED", "learned_gpdm", "model_path"]
 

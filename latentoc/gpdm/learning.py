@@ -33,97 +33,23 @@ Balanced GPDM (Urtasun et al. 2006): the dynamics term times lambda = D/d (``bal
 
 from __future__ import annotations
 
-import json
 import time
-from dataclasses import asdict, dataclass, field, fields
-from typing import TYPE_CHECKING, Sequence
+from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
-from ..errors import LatentocError
 from ..progress import bar
+from ..threads import blas_threads
 from .hessian import hessian
 from .newton import minimize_newton
-from .objective import HYPER_NAMES, KAPPA_SQ, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
-from .size import GPDMSizeError, check_size  # noqa: F401  (GPDMSizeError: re-exported)
-from .start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start, pca_initialization
-from .threads import blas_threads as _blas_threads, openblas_handles as _openblas_handles  # noqa: F401  (re-exported)
+from .model import GPDM, LearningReport
+from .objective import HYPER_NAMES, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
+from .settings import GPDMInputError, GPDMSettings, check_settings
+from .size import check_size
+from .start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .model import GPDM
-
-__all__ = ["GPDMSettings", "GPDMInputError", "GPDMSizeError", "learn_gpdm", "learning_problem", "prepare_data",
-           "pca_initialization", "roughness"]
-
-
-class GPDMInputError(LatentocError, ValueError):
-    """Invalid training data or settings for GPDM learning."""
-
-
-#: hyperparameters held fixed: beta_1 (the scale of W, module docstring)
-DEFAULT_FIXED: dict[str, float] = {"beta1": 1.0}
-#: Gamma(shape, rate) priors of the learned hyperparameters (module docstring)
-DEFAULT_GAMMA: dict[str, tuple[float, float]] = {
-    "alpha1": (2.0, 1.0), "alpha2": (2.0, 1.0), "alpha3": (2.0, 1.0), "alpha4": (2.0, 0.01),
-    "beta2": (2.0, 1.0), "beta3": (2.0, 1.0)}
-
-
-@dataclass
-class GPDMSettings:
-    """Settings of :func:`learn_gpdm` (all recorded in the learned model)."""
-
-    latent_dim: int = 3
-    balanced: bool = True  # lambda = D/d on the dynamics term (Urtasun et al. 2006)
-    # hyperparameters held at these values (HYPER_NAMES), not learned
-    fixed: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_FIXED))
-    # Gamma(shape, rate) priors replacing Eq. 16's 1/theta prior of these hyperparameters
-    gamma: dict[str, tuple[float, float]] = field(default_factory=lambda: dict(DEFAULT_GAMMA))
-    ftol: float = 1e-10  # convergence: the Newton decrement <= ftol |L| (:mod:`latentoc.gpdm.newton`)
-    max_iterations: int = 500  # Newton iterations (fresh Hessians) at most: a safety cap, then not converged
-    seed: int = 0  # only used by init="random"
-    init: str = "pca"  # "pca" or "random"
-    kappa_sq: float = KAPPA_SQ
-    alpha0: tuple[float, ...] = (0.9, 1.0, 0.1, float(np.e))
-    beta0: tuple[float, ...] = (1.0, 1.0, float(np.e))
-    log_hyper_bound: float = 40.0  # |ln alpha_i|, |ln beta_i| <= this (a hyperparameter on it: not converged)
-    blas_threads: int | None = 1  # BLAS threads during learning (None: leave as is)
-
-    def to_json(self) -> str:
-        """Settings as a JSON string."""
-        return json.dumps(asdict(self), sort_keys=True)
-
-    @classmethod
-    def from_json(cls, text: str) -> "GPDMSettings":
-        """Inverse of :meth:`to_json`."""
-        data = json.loads(text)
-        for key in ("alpha0", "beta0"):
-            if key in data:
-                data[key] = tuple(data[key])
-        if "gamma" in data:
-            data["gamma"] = {k: tuple(v) for k, v in data["gamma"].items()}
-        known = {f.name for f in fields(cls)}  # a model saved by an older version: its other keys dropped
-        return cls(**{k: v for k, v in data.items() if k in known})
-
-
-def _check_settings(settings: GPDMSettings) -> None:
-    if not isinstance(settings.latent_dim, (int, np.integer)) or settings.latent_dim < 1:
-        raise GPDMInputError(f"settings.latent_dim must be a positive integer, got {settings.latent_dim!r}")
-    if settings.max_iterations < 1 or not settings.ftol > 0:
-        raise GPDMInputError(f"settings.max_iterations must be >= 1 and settings.ftol > 0, got "
-                             f"{settings.max_iterations!r} and {settings.ftol!r}")
-    if settings.init not in ("pca", "random"):
-        raise GPDMInputError(f"settings.init must be 'pca' or 'random', got {settings.init!r}")
-    if len(settings.alpha0) != 4 or len(settings.beta0) != 3 or min(settings.alpha0) <= 0 \
-            or min(settings.beta0) <= 0:
-        raise GPDMInputError("settings.alpha0 must be 4 positive numbers and settings.beta0 3 positive numbers")
-    for name, value in settings.fixed.items():
-        if name not in HYPER_NAMES or not float(value) > 0:
-            raise GPDMInputError(f"settings.fixed: {name!r} = {value!r}; keys are {', '.join(HYPER_NAMES)}, "
-                                 "values positive")
-    for name, ab in settings.gamma.items():
-        if name not in HYPER_NAMES or len(ab) != 2 or min(ab) < 0:
-            raise GPDMInputError(f"settings.gamma: {name!r} = {ab!r}; keys are {', '.join(HYPER_NAMES)}, "
-                                 "values (shape, rate) >= 0")
+__all__ = ["learn_gpdm", "learning_problem", "prepare_data", "roughness"]
 
 
 def prepare_data(Y: np.ndarray | Sequence[np.ndarray], latent_dim: int) -> tuple[np.ndarray, list[int]]:
@@ -209,23 +135,21 @@ class _FreePoint:
     ev: Evaluation
 
 
-def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | None = None) -> "GPDM":
+def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | None = None) -> GPDM:
     """Learn a GPDM from one sequence (N x D) or a list of sequences: minimise Eq. 16 with the
     settings' fixed hyperparameters and priors, W profiled out, until the convergence test holds.
     Shows its progress (iteration, L, Newton decrement) on stderr (:mod:`latentoc.progress`).
 
-    Module docstring: the model and the procedure. Raises :class:`GPDMSizeError` before anything is
+    Module docstring: the model and the procedure. Raises :class:`~latentoc.gpdm.size.GPDMSizeError` before anything is
     computed when the data need more memory than the machine has.
     """
     return _learn(Y, GPDMSettings() if settings is None else settings, COARSE_ABOVE)
 
 
-def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_above: int) -> "GPDM":
+def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_above: int) -> GPDM:
     """:func:`learn_gpdm`, starting from the model of every second frame above ``coarse_above`` frames
     (that model's own levels halve down to COARSE_DOWN_TO frames: start.py)."""
-    from .model import GPDM, LearningReport
-
-    _check_settings(settings)
+    check_settings(settings)
     d = int(settings.latent_dim)
     Ys, lengths = prepare_data(Y, d)
     N, D = Ys.shape
@@ -264,7 +188,7 @@ def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_
         return hessian(point.ev, free[n_free_x:])
 
     lower = np.r_[np.full(n_free_x, -np.inf), np.full(int(free[n_free_x:].sum()), -bound)]
-    with _blas_threads(settings.blas_threads), bar(desc=f"GPDM on {N} frames", unit="it") as progress:
+    with blas_threads(settings.blas_threads), bar(desc=f"GPDM on {N} frames", unit="it") as progress:
         def report_step(step: int, f: float, decrement: float) -> None:
             progress.update(1)
             progress.set_postfix_str(f"L = {f:.10g}, decrement {decrement:.2g}")  # each iteration shown

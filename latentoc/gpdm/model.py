@@ -21,13 +21,14 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import solve_triangular
 
 from .kernels import rbf_linear_kernel
 from .objective import safe_cholesky, sequence_indices
+from .settings import GPDMSettings
 
 if TYPE_CHECKING:  # pragma: no cover
     import casadi
@@ -70,7 +71,7 @@ class GPDM:
     W: np.ndarray  # (D,) per-dimension scales
     Y_mean: np.ndarray  # (D,)
     Y: np.ndarray  # N x D original (uncentred) training data
-    settings: Any  # GPDMSettings
+    settings: GPDMSettings
     objective_value: float
     learning: LearningReport = field(default_factory=LearningReport)
     _cache: dict = field(default_factory=dict, init=False, repr=False)
@@ -238,8 +239,6 @@ class GPDM:
     @classmethod
     def load(cls, path: str | Path) -> "GPDM":
         """Load a model written by :meth:`save`."""
-        from .learning import GPDMSettings
-
         with np.load(Path(path), allow_pickle=False) as f:
             learning = LearningReport(**json.loads(str(f["learning_json"]))) if "learning_json" in f \
                 else LearningReport(message="not recorded")

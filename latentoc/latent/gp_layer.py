@@ -36,53 +36,19 @@ with G0 = dy/dx, G1 = dyd/dx and G2 = dydd/dx,
 """
 from __future__ import annotations
 
-import functools
 from collections import OrderedDict
-from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Callable, Iterator
+from typing import Callable
 
 import numpy as np
 from scipy.linalg.blas import dtrmm
 
 from ..gpdm import GPDM
+from ..threads import one_blas_thread
 
 __all__ = ["GPLayer", "IdentityLayer", "LatentMotion"]
 
 _CACHE_ENTRIES = 6  # inputs whose kernel features are kept (a few node sets share a layer)
-_BLAS_HANDLES: list[tuple] | None = None
-
-
-@contextmanager
-def _one_blas_thread() -> Iterator[None]:
-    """OpenBLAS on one thread inside (best effort): the products here are a few hundred wide, and
-    on a small shared machine BLAS threads waiting for a busy core cost more than they share
-    (as in GPDM learning, :func:`latentoc.gpdm.learning._blas_threads`)."""
-    global _BLAS_HANDLES
-    if _BLAS_HANDLES is None:
-        from ..gpdm.learning import _openblas_handles
-
-        _BLAS_HANDLES = _openblas_handles()
-    saved = []
-    for get, set_ in _BLAS_HANDLES:
-        n = int(get())
-        if n != 1:
-            set_(1)
-            saved.append((set_, n))
-    try:
-        yield
-    finally:
-        for set_, n in saved:
-            set_(n)
-
-
-def _blas_single(method: Callable) -> Callable:
-    @functools.wraps(method)
-    def wrapper(*args, **kwargs):
-        with _one_blas_thread():
-            return method(*args, **kwargs)
-
-    return wrapper
 
 
 @dataclass
@@ -179,7 +145,7 @@ class GPLayer:
         return self._cached("z", Z, make)
 
     # -------------------------------------------------------------- motion
-    @_blas_single
+    @one_blas_thread
     def motion(self, Z: np.ndarray) -> LatentMotion:
         """y, yd, ydd (Eq. 18, 26-28) and the tangents G0, G1, G2 at the rows of Z (K x 3d)."""
         Z, X, Xd, Xdd = _split(Z, self.latent_dim)
@@ -196,7 +162,7 @@ class GPLayer:
         G0, G1, G2 = (np.swapaxes(G, 1, 2) for G in (G0, G1, G2))
         return LatentMotion(self.y_mean + kC, -b2 * ksC, khC.copy(), G0, G1, G2)
 
-    @_blas_single
+    @one_blas_thread
     def curvature(self, Z: np.ndarray, mu: np.ndarray) -> np.ndarray:
         """sum_j mu_j d2u_j/dz2 (K x 3d x 3d) for u = (y, yd, ydd) and multipliers mu (K x 3D)."""
         Z, X, Xd, Xdd = _split(Z, self.latent_dim)
@@ -247,7 +213,7 @@ class GPLayer:
 
         return self._cached("x", X, make)
 
-    @_blas_single
+    @one_blas_thread
     def variance(self, X: np.ndarray, lam: np.ndarray | None = None):
         """sigma^2 (Eq. 19) at the rows of X (K x d) and its gradient (K x d); with ``lam`` (K)
         also the curvature lam_k d2 sigma^2/dx2 (K x d x d)."""

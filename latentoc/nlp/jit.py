@@ -19,6 +19,7 @@ from pathlib import Path
 import casadi as ca
 
 from ..errors import LatentocError
+from ..paths import cache_dir
 from ..progress import bar
 
 __all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "threads", "node_map"]
@@ -33,14 +34,6 @@ def flags_for(f: ca.Function, hot: bool = True) -> tuple[str, ...]:
     """Compiler flags for Function ``f``: -O1 when ``hot`` (evaluated at many nodes every
     iteration) and not huge, else -O0 (docs/derivatives.md)."""
     return JIT_FLAGS if hot and f.n_instructions() <= LARGE_FUNCTION else ONCE_FLAGS
-
-
-def cache_dir() -> Path:
-    """Directory of compiled libraries (module doc)."""
-    if os.environ.get("LATENTOC_CACHE"):
-        return Path(os.environ["LATENTOC_CACHE"])
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "latentoc" / "jit"
 
 
 def compiler() -> str | None:
