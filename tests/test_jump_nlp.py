@@ -134,12 +134,13 @@ def test_point_and_multipliers_follow_their_rows_into_an_nlp_with_more_samples(s
 
 
 def test_row_and_variable_bounds(small_jump):
-    """Torque rows bounded by the training limits over their range (per joint, at every node and
-    sample), the contact schedule in the heel and ball bounds (a loaded point on the ground within
+    """Torque rows bounded by the training limits (held TORQUE_BACKOFF inside them) over their range
+    (per joint, at every node and sample), the contact schedule in the heel and ball bounds (a loaded point on the ground within
     the contact tolerance, an unloaded ball above the soft-sole depth), the centre of pressure by
     the loaded support, the feet, polygons, flight clearance and tube one-sided as the module doc
     says; edge weights >= 0 and zero on the unloaded points."""
     from latentoc.jump.contact import POINTS
+    from latentoc.jump.nlp import TORQUE_BACKOFF, TUBE_BACKOFF
 
     sj = small_jump
     jn, robot, s, ph = sj.nlp, sj.robot, sj.settings, sj.js.phases
@@ -147,8 +148,8 @@ def test_row_and_variable_bounds(small_jump):
     lo, hi, act, scale = robot.limits.tau_min, robot.limits.tau_max, robot.active, robot.torque_scale
     sel = names == "torque"
     assert sel.sum() > 0 and set(comps[sel]) == set(robot.unmirrored)
-    np.testing.assert_allclose(lbg[sel] * scale[comps[sel]], lo[act][comps[sel]], rtol=1e-12)
-    np.testing.assert_allclose(ubg[sel] * scale[comps[sel]], hi[act][comps[sel]], rtol=1e-12)
+    np.testing.assert_allclose(lbg[sel] * scale[comps[sel]], lo[act][comps[sel]] + TORQUE_BACKOFF, rtol=1e-12)
+    np.testing.assert_allclose(ubg[sel] * scale[comps[sel]], hi[act][comps[sel]] - TORQUE_BACKOFF, rtol=1e-12)
     t = jn.row_times
     for part in ("heel_height", "ball_height"):
         assert (names == part).sum() == 12  # at the contact nodes only
@@ -169,7 +170,7 @@ def test_row_and_variable_bounds(small_jump):
                  "impact": (0, 0), "touchdown_position": (0, 0), "pitch_integration": (0, 0),
                  "flight_base": (0, 0), "pitch_rate": (0, 0),
                  "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "flight_clearance": (0, np.inf),
-                 "tube": (-np.inf, 1.0), "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf),
+                 "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf),
                  "cop_pad": (0, np.inf)}
     assert set(one_sided) | {"torque", "heel_height", "ball_height"} == set(names)
     for part, (a, b) in one_sided.items():

@@ -4,14 +4,15 @@ Joint motion from the GP layer along the optimal latent path, the base from the 
 phases' splines and, in flight, ballistic from the takeoff state with the pitch rate
 integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
 and samples (the wrench split is part of the solution there); between them, the edge weights
-interpolated and corrected, least norm, to balance the sagittal base rows
-(:func:`corrected_edge_weights`). The exchange (:mod:`.exchange`) adds a contact sample wherever
+interpolated and corrected to the non-negative weights nearest them that balance the sagittal base
+rows (:func:`corrected_edge_weights`). The exchange (:mod:`.exchange`) adds a contact sample wherever
 this split does not hold the cones or the torque limits.
 """
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from scipy.optimize import nnls
 
 from ..latent.gp_layer import GPLayer
 from .base import base_to_freeflyer
@@ -107,19 +108,17 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, nlp: JumpNLP, w
 
 
 def corrected_edge_weights(C: np.ndarray, tau: np.ndarray, lam0: np.ndarray, free: np.ndarray) -> np.ndarray:
-    """``lam0`` with its loaded (``free``) edges corrected, least norm, to balance the sagittal base
-    rows of ``tau = rnea(q, v, a)`` with the generalized forces ``C`` of the edges (nv x 8); the
-    unloaded edges zero; an edge the correction would push below zero held at zero (while three
-    edges are left to balance the rows)."""
-    lam = np.where(free, lam0, 0.0)
-    r = tau[SAGITTAL]
-    use = free.copy()
-    for _ in range(int(free.sum())):  # an edge pushed below zero is held at zero, the rest corrected again
-        Cr = C[SAGITTAL][:, use]
-        x = lam[use] + np.linalg.lstsq(Cr, r - Cr @ lam[use], rcond=None)[0]
-        if x.min() >= 0.0 or use.sum() <= 3:
-            lam[use] = x
-            return lam
-        worst = np.flatnonzero(use)[np.argmin(x)]
-        lam[worst], use[worst] = 0.0, False
+    """The non-negative edge weights nearest ``lam0`` on the loaded (``free``) edges that balance the
+    sagittal base rows of ``tau = rnea(q, v, a)`` with the generalized forces ``C`` of the edges
+    (nv x 8); the unloaded edges zero. Least squares with the rows weighted 1e6 over the distance
+    (scipy's NNLS), then their remainder corrected least norm on the edges that carry force."""
+    lam = np.zeros_like(lam0)
+    Cr, r = C[SAGITTAL][:, free], tau[SAGITTAL]
+    scale = np.maximum(np.linalg.norm(Cr, axis=1), 1e-12)[:, None]
+    A = np.vstack([1e6 * Cr / scale, np.eye(int(free.sum()))])
+    x = nnls(A, np.concatenate([1e6 * r / scale[:, 0], np.clip(lam0[free], 0.0, None)]), maxiter=200)[0]
+    on = x > 0
+    if on.any():
+        x[on] += np.linalg.lstsq(Cr[:, on], r - Cr @ x, rcond=None)[0]
+    lam[free] = x
     return lam

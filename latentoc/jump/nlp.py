@@ -44,6 +44,9 @@ __all__ = ["JumpNLP", "build_nlp", "node_grid", "tube_times", "contact_sample_gr
 
 OBJECTIVES = ("feasibility", "distance")
 FORCE_REGULARISATION = 1e-4
+# the rows held this much inside their limits, so that between the samples the 1 kHz grid stays
+# inside them: torque in N m, the tube as a fraction of delta
+TORQUE_BACKOFF, TUBE_BACKOFF = 0.02, 1e-4
 
 
 @dataclass
@@ -368,7 +371,7 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: 
               "toe_position": (-s.foot_tolerance, s.foot_tolerance), "heel_height": (-s.contact_tolerance, np.inf),
               "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "takeoff": (0, 0),
               "pitch_integration": (0, 0), "flight_clearance": (0, np.inf), "touchdown_position": (0, 0),
-              "impact": (0, 0), "tube": (-np.inf, 1.0), "pitch_rate": (0, 0),
+              "impact": (0, 0), "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "pitch_rate": (0, 0),
               **{k: (0, np.inf) for k in ("cop_front", "cop_heel", "cop_ball", "cop_pad")}}
     lbg, ubg = np.zeros(len(names)), np.zeros(len(names))
     for k, (lo, hi) in bounds.items():
@@ -376,8 +379,8 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: 
         lbg[sel], ubg[sel] = lo, hi
     torque = names == "torque"  # components: positions among the active joints
     act, scale = robot.active, robot.torque_scale
-    lbg[torque] = robot.limits.tau_min[act][comps[torque]] / scale[comps[torque]]
-    ubg[torque] = robot.limits.tau_max[act][comps[torque]] / scale[comps[torque]]
+    lbg[torque] = (robot.limits.tau_min[act][comps[torque]] + TORQUE_BACKOFF) / scale[comps[torque]]
+    ubg[torque] = (robot.limits.tau_max[act][comps[torque]] - TORQUE_BACKOFF) / scale[comps[torque]]
     # the contact schedule: a loaded heel stays on the ground, a loaded ball within the tolerance
     heel, ball = names == "heel_height", names == "ball_height"
     ubg[heel] = np.where(ph.loaded("heel", times[heel]), s.contact_tolerance, np.inf)

@@ -121,16 +121,25 @@ class _Callback(ca.Callback):
             return self._jac_x
         return ca.Sparsity(self._outs[oind][1].nnz(), self._ins[iind][1].nnz())
 
-    def eval(self, args):
+    # evaluated in place on CasADi's buffers (inputs and outputs as their nonzeros): no DM is made
+    def has_eval_buffer(self):
+        return True
+
+    def eval_buffer(self, args, res):
         t0 = time.perf_counter()
         try:
-            out = self._fn(*[np.asarray(a.full() if hasattr(a, "full") else a, float).ravel() for a in args])
+            # a missing input is zero; a missing output was not asked for
+            out = self._fn(*[np.zeros(sp.nnz()) if a is None else np.frombuffer(a, dtype=np.float64)
+                             for a, (_, sp) in zip(args, self._ins)])
+            for r, v in zip(res, out):
+                if r is not None:
+                    np.frombuffer(r, dtype=np.float64)[:] = np.ravel(v)
         except BaseException as exc:
             self._raised.record(exc)
             raise
         self._timings[self.name()] = self._timings.get(self.name(), 0.0) + time.perf_counter() - t0
         self._calls[self.name()] = self._calls.get(self.name(), 0) + 1
-        return [ca.DM(sp, np.atleast_1d(np.asarray(v, float)).ravel()) for v, (_, sp) in zip(out, self._outs)]
+        return 0
 
 
 class _Progress(ca.Callback):
