@@ -42,7 +42,7 @@ from .nlp import ipopt
 from .nlp.ipopt import HESSIANS, IpoptResult
 from .motions import TRAINING, TRAINING_MOTIONS, Demonstration, check_frames
 from .problem import TUBE, Problem
-from .problem_inputs import check_problem_files, problem_demonstration, require_fixed_base
+from .motions.problem_inputs import check_problem_files, problem_demonstration, require_fixed_base
 from .results import convergence_entry
 from .robots import ROBOT, describe_robot
 from .schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text

@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 from latentoc import animation
-from latentoc.human_models import arm_training_motion, build_human_arm
+from latentoc.robots.human_arm import arm_trial, build_human_arm
 from latentoc.plots import DPI
 
 
@@ -23,7 +23,7 @@ def test_frame_times_cover_the_motion():
 
 
 def test_animate_writes_gif(tmp_path):
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     model = build_human_arm()
     t, Q = t[:121], Q[:121]  # 1 s
     p = animation.animate(model, t, Q, tmp_path / "arm.gif", fps=8, plane="yz", title="arm")
@@ -41,7 +41,7 @@ def test_gif_plays_at_the_motions_speed(tmp_path, fps):
     delays = animation.frame_delays_cs(50, fps)
     starts = np.concatenate([[0], np.cumsum(delays)]) / 100.0
     assert np.allclose(starts, np.arange(51) / fps, atol=0.005)
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     model = build_human_arm()
     p = animation.animate(model, t[:61], Q[:61], tmp_path / "arm.gif", fps=fps, plane="yz")
     with Image.open(p) as im:
@@ -56,7 +56,7 @@ def test_gif_plays_at_the_motions_speed(tmp_path, fps):
 def test_gif_shows_the_initial_motion(tmp_path):
     """With the initial motion, its ghost's grey is drawn in every frame: hundreds of pixels more of it
     than without (where only anti-aliased edges come near that grey)."""
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     model = build_human_arm()
     t, Q = t[:61], Q[:61]
     grey = np.array([0xb3, 0xb3, 0xb3])

@@ -3,8 +3,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.human_arm import training_motion
-from latentoc.human_models import arm_training_motion, build_human_arm
+from latentoc.robots.human_arm import arm_trial, build_human_arm
 
 
 @pytest.fixture(scope="module")
@@ -32,22 +31,22 @@ def test_sizes_and_mass(arm):
 
 
 def test_start_and_goal_poses(arm):
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     start, goal = _hand(arm, Q[0]), _hand(arm, Q[-1])
     assert start[2] < -0.5 and np.hypot(start[0], start[1]) < 0.15  # hanging down
     assert goal[2] > 0.3 and goal[0] > 0.2  # raised forward, above the shoulder (z = 0)
 
 
 def test_timing_and_smoothness(arm):
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     assert t.shape == (349,) and Q.shape == (349, 7)
     assert t[0] == 0.0 and np.isclose(t[-1], 2.9) and np.allclose(np.diff(t), 1 / 120)
     dt = t[1] - t[0]
     V = np.gradient(Q, dt, axis=0)
     A = np.gradient(V, dt, axis=0)
     assert np.abs(V).max() < 3.0 and np.abs(A).max() < 10.0  # rad/s, rad/s^2
-    _, Va = training_motion(1)
-    _, Aa = training_motion(2)
+    _, Va = arm_trial(1)
+    _, Aa = arm_trial(2)
     assert np.allclose(Va[[0, -1]], 0) and np.allclose(Aa[[0, -1]], 0)
     assert np.allclose(V[1:-1], Va[1:-1], atol=1e-3)  # analytic derivatives consistent
     # no jumps in acceleration (C2): per-sample change bounded by jerk * dt
@@ -57,10 +56,10 @@ def test_timing_and_smoothness(arm):
 
 
 def test_within_limits_and_not_optimal(arm):
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     assert np.all(Q >= arm.lowerPositionLimit) and np.all(Q <= arm.upperPositionLimit)
-    _, V = training_motion(1)
-    _, A = training_motion(2)
+    _, V = arm_trial(1)
+    _, A = arm_trial(2)
     d = arm.createData()
     cost = sum(np.sum(pin.rnea(arm, d, q, v, a) ** 2) for q, v, a in zip(Q, V, A)) * (t[1] - t[0])
     # the straight minimum-jerk blend between the same poses is cheaper: a detour

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from latentoc.human_models import build_cmu_humanoid, cmu_skeleton
+from latentoc.robots.human_models import build_cmu_humanoid, cmu_skeleton
 from latentoc.mocap.anthropometry import BONE_MAP, DE_LEVA_MALE, BILATERAL, cmu_inertias, de_leva_segments
 
 
@@ -45,7 +45,7 @@ def test_scaling_with_height_and_mass():
 def test_mass_matrix_positive_definite_on_data():
     import pinocchio as pin
 
-    from latentoc.human_models import cmu_configurations
+    from latentoc.robots.human_models import cmu_configurations
     m = build_cmu_humanoid()
     d = m.createData()
     for q in cmu_configurations(m, slice(0, 2751, 500)):

@@ -2,7 +2,7 @@
 import numpy as np
 import pinocchio as pin
 
-from latentoc.human_models import build_cmu_humanoid, cmu_configurations, cmu_motion, cmu_skeleton
+from latentoc.robots.human_models import build_cmu_humanoid, cmu_configurations, cmu_motion, cmu_skeleton
 from latentoc.mocap.skeleton_model import joint_q_index
 
 

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from latentoc.human_models import (broad_jump_sequences, broad_jump_training_motion,
-                                   build_cmu_humanoid, cmu_configurations)
+from latentoc.robots.human_models import (broad_jump_sequences, broad_jump_training_motion,
+                                          build_cmu_humanoid, cmu_configurations)
 from latentoc.mocap.jumps import detect_jumps
 
 README_FLIGHT_STARTS = [230, 432, 597, 786, 1289, 1551, 1780, 2218, 2434, 2636]

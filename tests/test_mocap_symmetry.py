@@ -3,7 +3,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.human_models import build_cmu_humanoid, cmu_configurations, cmu_skeleton
+from latentoc.robots.human_models import build_cmu_humanoid, cmu_configurations, cmu_skeleton
 from latentoc.mocap.skeleton_model import build_model
 from latentoc.mocap.symmetry import SymmetryMap, mirror_partner, symmetrized_skeleton
 

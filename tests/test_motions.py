@@ -1,4 +1,4 @@
-"""Motion files (latentoc.motion_files, latentoc.motions): CSV, NPZ and ASF + AMC on a robot, joint
+"""Motion files (latentoc.motions): CSV, NPZ and ASF + AMC on a robot, joint
 order, locked joints, resampling, limits, and every bad input as a MotionFileError naming the file;
 the CSV reader fuzzed (only latentoc's error type escapes)."""
 from pathlib import Path
@@ -10,8 +10,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from latentoc.errors import LatentocError
-from latentoc.human_models import arm_training_motion, cmu_configurations
-from latentoc.motion_files import MotionFileError, read_csv
+from latentoc.robots.human_arm import arm_trial
+from latentoc.robots.human_models import cmu_configurations
+from latentoc.motions.readers import MotionFileError, read_csv
 from latentoc.motions import TRAINING, check_frames, demonstration_from_file, load_demonstration
 from latentoc.robots import load_robot
 
@@ -101,7 +102,7 @@ def test_amc_frames_on_the_human_arm_are_the_cmu_configurations():
 
 def test_registered_names_and_tables_load(tmp_path, ur5):
     demo = load_demonstration("human-arm-trial", load_robot("human-arm"))
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     assert np.array_equal(demo.Q, Q) and demo.joint_names[0] == "lhumerus_rz"
     t, Q = motion()
     write_csv(tmp_path / "m.csv", UR5_JOINTS, t, Q)

@@ -6,7 +6,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.human_models import build_human_arm, skeleton_chain
+from latentoc.robots.human_arm import build_human_arm
+from latentoc.robots.human_models import skeleton_chain
 from latentoc.robots import (ROBOT, RobotFileError, example_robot_data_dir, load_robot, load_urdf,
                              robot_from_setting)
 

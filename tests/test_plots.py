@@ -13,12 +13,12 @@ from result_factory import make_result
 
 from latentoc import plots
 from latentoc.gpdm import GPDMSettings, learn_gpdm
-from latentoc.human_models import arm_training_motion, build_human_arm
+from latentoc.robots.human_arm import arm_trial, build_human_arm
 
 
 @pytest.fixture(scope="module")
 def arm():
-    t, Q = arm_training_motion()
+    t, Q = arm_trial()
     return build_human_arm(), t, Q
 
 
@@ -324,7 +324,7 @@ def test_plot_solution_arm(arm, gpdm3, tmp_path, fmt="png"):
 def test_plot_solution_jump_format(tmp_path):
     """A broad-jump result (actuated tau, one wrench per foot, touchdown, heel offset, no v limits): the
     contact figures are derived; the training jump at its own frame rate gives the stick frames' ghost."""
-    from latentoc.human_models import broad_jump_training_motion, build_cmu_humanoid
+    from latentoc.robots.human_models import broad_jump_training_motion, build_cmu_humanoid
 
     model = build_cmu_humanoid()
     tj, Qj = broad_jump_training_motion()

@@ -170,8 +170,8 @@ def test_joint_range_converges_within_range(joint_range):
 
 
 def test_joint_range_starts_from_the_training_motion(joint_range):
-    from latentoc.human_models import arm_training_motion
-    t, Q = arm_training_motion()
+    from latentoc.robots.human_arm import arm_trial
+    t, Q = arm_trial()
     tr = joint_range.trajectory
     qi = np.array([np.interp(t, tr["t"], tr["q_initial"][:, j]) for j in range(7)]).T
     assert np.degrees(np.abs(qi - Q).max()) < 3.0

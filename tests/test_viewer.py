@@ -83,7 +83,7 @@ def test_skeleton_capsules_lie_on_the_bones():
 
 
 def test_contact_points_and_samples():
-    from latentoc.human_models import broad_jump_training_motion, build_cmu_humanoid
+    from latentoc.robots.human_models import broad_jump_training_motion, build_cmu_humanoid
 
     model = build_cmu_humanoid()
     _, Q = broad_jump_training_motion()
@@ -122,7 +122,7 @@ def test_page_is_self_contained(tmp_path):
 def pages(tmp_path_factory, panda_reduced):
     """Pages of two results, each with a twin page without the robot (the same camera, ground and
     controls): the Panda (meshes, the initial motion's ghost) and a jump on the ground (capsules, contacts)."""
-    from latentoc.human_models import broad_jump_training_motion, build_cmu_humanoid
+    from latentoc.robots.human_models import broad_jump_training_motion, build_cmu_humanoid
 
     d = tmp_path_factory.mktemp("view")
     out = {}

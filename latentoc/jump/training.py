@@ -20,7 +20,7 @@ from functools import lru_cache
 import numpy as np
 import pinocchio as pin
 
-from ..human_models import broad_jump_sequences, cmu_skeleton
+from ..robots.human_models import broad_jump_sequences, cmu_skeleton
 from ..mocap.anthropometry import cmu_inertias
 from ..mocap.skeleton_model import build_model
 from ..mocap.symmetry import SymmetryMap, symmetrized_skeleton

@@ -7,14 +7,14 @@ A problem file's ``training`` is a name of :data:`TRAINING_MOTIONS` or a table n
     training = { file = "reach.npz", rate = 100.0, fixed_pose = { panda_finger_joint1 = 0.02 } }
     training = { file = "01_01.amc", asf = "01.asf", start = 120, stop = 468, fps = 120.0 }
 
-:func:`demonstration_from_file` turns a file (:mod:`latentoc.motion_files`) into a
+:func:`demonstration_from_file` turns a file (:mod:`.readers`) into a
 :class:`Demonstration`: the samples in the robot's joint order, time from 0 on a uniform grid
 (non-uniform time stamps, or a given ``rate``, resampled by a cubic spline through the samples),
 inside the robot's joint limits (or clipped to them with ``clip_to_limits``), and the robot
 reduced to the joints the file moves, the others locked at ``fixed_pose`` or the model's neutral.
 A continuous joint (a URDF's ``continuous``) takes one angle, in rad, with no limits
-(:func:`latentoc.robots.continuous_as_revolute`).
-Every problem is a :class:`~latentoc.motion_files.MotionFileError` naming the file.
+(:func:`latentoc.robots.urdf.continuous_as_revolute`).
+Every problem is a :class:`~.readers.MotionFileError` naming the file.
 """
 from __future__ import annotations
 
@@ -27,9 +27,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.interpolate import CubicSpline
 
-from .motion_files import FORMATS, MotionFileError, RawMotion, read_raw_motion
-from .robots import continuous_as_revolute
-from .schema import Check
+from ..robots.human_arm import arm_trial
+from ..robots.human_models import broad_jump_training_motion
+from ..robots.urdf import continuous_as_revolute
+from ..schema import Check
+from .readers import FORMATS, MotionFileError, RawMotion, read_raw_motion
 
 __all__ = ["Demonstration", "TRAINING", "TRAINING_MOTIONS", "demonstration_from_file", "load_demonstration",
            "one_dof_joints", "check_frames", "MotionFileError"]
@@ -38,20 +40,10 @@ UNIFORM_RTOL = 1e-6  # time steps within this fraction of the median step count 
 MAX_SAMPLES = 1_000_000  # a resampled motion may have at most this many samples
 
 
-def _arm_trial() -> tuple[np.ndarray, np.ndarray]:
-    from .human_models import arm_training_motion
-    return arm_training_motion()
-
-
-def _broad_jump() -> tuple[np.ndarray, np.ndarray]:
-    from .human_models import broad_jump_training_motion
-    return broad_jump_training_motion()
-
-
 #: Named training motions: name -> () -> (t [N], Q [N x nq]).
 TRAINING_MOTIONS: dict[str, Callable[[], tuple[np.ndarray, np.ndarray]]] = {
-    "human-arm-trial": _arm_trial,
-    "cmu-broad-jump": _broad_jump,
+    "human-arm-trial": arm_trial,
+    "cmu-broad-jump": broad_jump_training_motion,
 }
 
 _TABLE_KEYS = {"file": str, "format": str, "asf": str, "fps": float, "start": int, "stop": int, "rate": float,

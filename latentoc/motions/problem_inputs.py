@@ -1,6 +1,6 @@
 """The robot and the training motion a problem names: registered names, or files relative to the problem file.
 
-``robot`` (:data:`latentoc.robots.ROBOT`) and ``training`` (:data:`latentoc.motions.TRAINING`)
+``robot`` (:data:`latentoc.robots.ROBOT`) and ``training`` (:data:`.demonstration.TRAINING`)
 are checked as values when the file is loaded; :func:`check_problem_files` checks that the
 files they name exist (at load time, naming the problem file), and :func:`problem_demonstration`
 reads them: the robot, then the motion on it, the robot reduced to the joints the motion moves.
@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pinocchio as pin
 
-from .errors import ProblemError, SolveError
-from .motions import Demonstration, load_demonstration
-from .problem import Problem
-from .robots import describe_robot, robot_files, robot_from_setting
+from ..errors import ProblemError, SolveError
+from ..problem import Problem
+from ..robots.setting import describe_robot, robot_files, robot_from_setting
+from .demonstration import Demonstration, load_demonstration
 
 __all__ = ["problem_dir", "problem_robot", "problem_demonstration", "check_problem_files", "require_fixed_base"]
 
@@ -30,7 +30,7 @@ def problem_robot(problem: Problem) -> pin.Model:
 
 
 def problem_demonstration(problem: Problem) -> Demonstration:
-    """The problem's training motion on its robot, all frames (:mod:`latentoc.motions`)."""
+    """The problem's training motion on its robot, all frames (:mod:`.demonstration`)."""
     return load_demonstration(problem.training, problem_robot(problem), problem_dir(problem))
 
 

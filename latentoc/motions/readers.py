@@ -22,8 +22,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import LatentocError
-from .files import NPZ_ERRORS
+from ..errors import LatentocError
+from ..files import NPZ_ERRORS
+from ..mocap import motion_to_q, read_amc, read_asf
+from ..mocap.skeleton_model import joint_q_index
 
 __all__ = ["MotionFileError", "RawMotion", "read_csv", "read_npz", "read_amc_motion", "read_raw_motion",
            "FORMATS"]
@@ -131,9 +133,6 @@ def read_npz(path: Path) -> RawMotion:
 def read_amc_motion(path: Path, asf: Path, model: pin.Model, fps: float = 120.0) -> RawMotion:
     """AMC frames (at ``fps``) of the skeleton ``asf`` on the robot's joints ``<bone>_<dof>``: the
     columns are the joints of ``model`` the skeleton moves."""
-    from .mocap import motion_to_q, read_amc, read_asf
-    from .mocap.skeleton_model import joint_q_index
-
     if not asf.is_file():
         raise MotionFileError(f"{path}: its skeleton {asf} does not exist")
     skeleton = read_asf(asf)

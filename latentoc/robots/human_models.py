@@ -1,15 +1,16 @@
-"""Human models and training motions of Kang & Park (2015), Sect. 4.1 and 4.2.
+"""The CMU subject 01 humanoid and its captured take 01_01 (Kang & Park 2015, Sect. 4.2).
 
 * :func:`build_cmu_humanoid` - the CMU subject 01 skeleton (31 links, 62 DOF = 6 base
   + 56 revolute) as a Pinocchio model with de Leva (1996) masses (Table 5: 63.86 kg,
   1.75 m).
-* :func:`build_human_arm`, :func:`arm_training_motion` - the 7-DOF arm (Sect. 4.1,
-  Table 1: 8.74 kg, 2.9 s), see :mod:`latentoc.human_arm`.
+* :func:`skeleton_chain` - a fixed-base chain of an ASF skeleton's bones (a problem's own
+  ``robot = { asf = ... }``);
 * :func:`broad_jump_training_motion`, :func:`broad_jump_sequences` - standing broad
   jumps cut from CMU take 01_01 (Sect. 4.2, Table 5: 1.3 s).
 
 The data files live in ``robots/cmu`` of the repository (or ``_data/robots/cmu``
-inside an installed wheel), see :func:`robots_dir`.
+inside an installed wheel), see :func:`cmu_file`. The 7-DOF arm of Sect. 4.1 is
+:mod:`.human_arm`.
 """
 from __future__ import annotations
 
@@ -19,35 +20,38 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .mocap.amc import Motion, read_amc
-from .mocap.anthropometry import cmu_inertias
-from .mocap.asf import Skeleton, read_asf
-from .mocap.configurations import motion_to_q
-from .mocap.skeleton_model import build_model
+from ..mocap.amc import Motion, read_amc
+from ..mocap.anthropometry import BONE_MAP, cmu_inertias
+from ..mocap.asf import Skeleton, read_asf
+from ..mocap.configurations import motion_to_q
+from ..mocap.jumps import detect_jumps, jump_window
+from ..mocap.skeleton_model import build_model
+from ..paths import data_dir
+from .robot_checks import check_model
+from .urdf import RobotFileError
+
+__all__ = ["cmu_file", "cmu_skeleton", "cmu_motion", "build_cmu_humanoid", "cmu_configurations", "skeleton_chain",
+           "broad_jump_sequences", "broad_jump_training_motion"]
 
 ASF_NAME = "01.asf"
 AMC_NAME = "01_01.amc"
 
 
-def robots_dir() -> Path:
-    """Folder holding ``cmu/01.asf``: repo ``robots/`` first, then the wheel's ``_data/robots``."""
-    here = Path(__file__).resolve()
-    for cand in (here.parents[1] / "robots", here.parent / "_data" / "robots"):
-        if (cand / "cmu" / ASF_NAME).is_file():
-            return cand
-    raise FileNotFoundError("robots/cmu/01.asf not found next to the package or in _data/robots")
+def cmu_file(name: str) -> Path:
+    """A file of ``robots/cmu`` (:func:`latentoc.paths.data_dir`: the checkout's, or the wheel's copy)."""
+    return data_dir("robots") / "cmu" / name
 
 
 @lru_cache(maxsize=1)
 def cmu_skeleton() -> Skeleton:
     """The parsed CMU subject 01 skeleton."""
-    return read_asf(robots_dir() / "cmu" / ASF_NAME)
+    return read_asf(cmu_file(ASF_NAME))
 
 
 @lru_cache(maxsize=1)
 def cmu_motion() -> Motion:
     """The parsed take 01_01 (2751 frames at 120 fps)."""
-    return read_amc(robots_dir() / "cmu" / AMC_NAME, cmu_skeleton())
+    return read_amc(cmu_file(AMC_NAME), cmu_skeleton())
 
 
 def build_cmu_humanoid(mass: float = 63.86, height: float = 1.75) -> pin.Model:
@@ -71,10 +75,6 @@ def skeleton_chain(asf: str | Path, bones: list[str], mass: float = 63.86, heigh
     """A fixed-base chain of ``bones`` of the ASF skeleton at ``asf`` (the first bone's parent is the
     world), de Leva masses of a subject of ``mass`` kg and ``height`` m, joints ``<bone>_<dof>`` as
     in the CMU humanoid; a :class:`~latentoc.robots.RobotFileError` if the file or a bone is wrong."""
-    from .mocap.anthropometry import BONE_MAP
-    from .robot_checks import check_model
-    from .robots import RobotFileError
-
     path = Path(asf)
     if not path.is_file():
         raise RobotFileError(f"skeleton {path} does not exist")
@@ -98,21 +98,8 @@ def skeleton_chain(asf: str | Path, bones: list[str], mass: float = 63.86, heigh
     return model
 
 
-def build_human_arm() -> pin.Model:
-    """The fixed-base 7-DOF human arm of Sect. 4.1 (see :mod:`latentoc.human_arm`)."""
-    from .human_arm import build_arm
-    return build_arm()
-
-
-def arm_training_motion() -> tuple[np.ndarray, np.ndarray]:
-    """The user-made arm-raising trial (t, Q), 349 samples over 2.9 s."""
-    from .human_arm import training_motion
-    return training_motion()
-
-
 def broad_jump_sequences() -> list[tuple[np.ndarray, np.ndarray]]:
     """Every standing broad jump of take 01_01 as (t, Q) with t starting at 0."""
-    from .mocap.jumps import detect_jumps, jump_window
     model = build_cmu_humanoid()
     Q = cmu_configurations(model)
     out = []
