@@ -238,8 +238,11 @@ def summary(r: Any) -> str:
                          f"{100 * d['toe_slip']:.2f} cm, height up to {100 * d['max_toe_height']:.2f} cm")
         if d.get("eq33_feet_distance") is not None:
             lines.append(f"  Eq. 33 feet distance (both toe tips) {d['eq33_feet_distance']:.3f} m")
-    lines.append(f"  times: gpdm {r.times.gpdm_s:.2f} s, build {r.times.build_s:.2f} s, solve {r.times.solve_s:.2f} s;"
-                 f" quadrature error {d.get('quadrature_error', 0.0):.2e}")
+    t = r.times
+    checks = f", 1 kHz checks {t.check_s:.2f} s" if t.check_s else ""
+    total = f"; in all {t.total_s:.2f} s" if t.total_s else ""
+    lines.append(f"  times: gpdm {t.gpdm_s:.2f} s, compile {t.compile_s:.2f} s, build {t.build_s:.2f} s, solve {t.solve_s:.2f} s"
+                 f"{checks}{total}; quadrature error {d.get('quadrature_error', 0.0):.2e}")
     return "\n".join(lines)
 
 

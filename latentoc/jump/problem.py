@@ -5,7 +5,7 @@
 ``friction``; :data:`RANGES` adds the ranges) and the set-up's own keys (:data:`SETUP_OPTIONS`).
 :func:`setup` learns the GPDM on the symmetric training jump (37 learned DOF; or every jump of
 the take), estimates the phases, the heel point and the torque limits, and fits the training
-start. :func:`solve_jump_problem` is ``latentoc.solve.SOLVERS["broad-jump"]``.
+start. :func:`solve_jump_problem` is the broad jump's solve (:mod:`.kind`).
 """
 from __future__ import annotations
 
@@ -19,13 +19,14 @@ import pinocchio as pin
 
 from ..dynamics import SymbolicModel
 from ..errors import ProblemError, SolveError
-from ..gpdm import GPDM, GPDMSettings, learned_gpdm
+from ..gpdm import GPDM, GPDMSettings, cached_gpdm
 from ..latent.gp_layer import GPLayer
 from ..nlp.blocks import RobotBlock, compile_blocks
-from ..problem import TUBE, Problem
+from ..kind import Solution
+from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
-from ..solve import SOLVERS, Solution, apply_overrides, resolve_tube
 from ..spline import BSpline
+from ..tube import TUBE, resolve_tube
 from .contact import POINTS, FootGeometry, foot_points
 from .phases import Phases, training_phases
 from .robot import JumpRobot
@@ -89,7 +90,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     if not (isinstance(stride, (int, np.integer)) and not isinstance(stride, bool) and 1 <= stride <= len(tr.t) // 4):
         raise ValueError(f"training stride must be an integer from 1 to {len(tr.t) // 4} (frames), got {stride!r}")
     Ys = [t.Y[::stride] for t in trs]
-    gp = learned_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
+    gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = FootGeometry.from_standing(model, tr.Q[0])
     phases = training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
@@ -273,7 +274,7 @@ def _violations(r: dict[str, Any], checks: dict[str, float], mu: float) -> dict[
 def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
                        gpdm: GPDM | None = None, verbose: bool = False, warm_start: Solution | None = None,
                        **overrides: Any) -> Solution:
-    """Solve, check on 1 kHz, return a :class:`latentoc.solve.Solution`. ``warm_start``: the
+    """Solve, check on 1 kHz, return a :class:`latentoc.kind.Solution`. ``warm_start``: the
     Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =
     "warm+cold"`` the tube is also solved from the training fit and the better jump kept.
     ``overrides`` (tube, control_points, ...) change the problem's settings first."""
@@ -321,7 +322,6 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     r.update(checks)
     r["violations"] = _violations(r, checks, s.mu)
     traj["x"], traj["P"] = traj.pop("latent"), traj.pop("control_points")  # the result schema's names
+    r["total_time_s"] = time.perf_counter() - t0
     return Solution(result=r, trajectory=traj, warm=sol.warm_start() if r["success"] else None, gpdm=js.gpdm)
 
-
-SOLVERS["broad-jump"] = solve_jump_problem
