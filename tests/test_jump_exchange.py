@@ -1,0 +1,51 @@
+"""The exchange's choice of samples (latentoc.jump.exchange) and the selection it grows
+(latentoc.jump.selection), on analytic slack series."""
+import numpy as np
+import pytest
+
+from latentoc.jump.exchange import TOLERANCE, _picked, violated
+from latentoc.jump.selection import Selection
+
+
+def test_a_stretch_near_its_bound_gets_its_least_slack_and_a_sample_every_spacing():
+    """A slack dipping below the margin over 1 kHz samples 106-139: the least slack (at 123) and
+    every 5th sample of the grid in the stretch; a two-sample dip also its neighbours 2 ms away."""
+    t = np.arange(300)
+    slack = np.where((t >= 100) & (t < 140), 0.5 * ((t - 123) / 20.0) ** 2, 1.0)
+    slack[250], slack[251] = 0.0, -0.01
+    picked = _picked(slack, slack < 0.4, spacing=5, neighbours=2)
+    assert 123 in picked and 251 in picked and 249 in picked and 253 in picked
+    inside = picked[(picked >= 100) & (picked < 140)]
+    stretch = np.flatnonzero((slack < 0.4) & (t >= 100) & (t < 140))
+    assert stretch[0] == 106 and stretch[-1] == 139
+    np.testing.assert_array_equal(inside, sorted({123, *range(110, 140, 5)}))
+    assert set(picked) <= set(range(100, 140)) | {249, 250, 251, 253}
+
+
+def test_no_stretch_no_sample():
+    assert _picked(np.ones(50), np.zeros(50, bool), 5, 2).size == 0
+
+
+@pytest.mark.parametrize("kind, unit", [("torque", TOLERANCE.torque), ("cop", TOLERANCE.cop),
+                                        ("zmp", TOLERANCE.polygon), ("tube", TOLERANCE.tube)])
+def test_violated_beyond_the_tolerance_only(kind, unit):
+    held = {k: 0.0 for k in ("torque", "normal", "friction", "point_cone", "cop", "zmp", "com", "tube")}
+    assert not violated({**held, kind: 0.9 * unit}) and violated({**held, kind: 1.1 * unit})
+
+
+def test_selections_merge_by_time_and_row():
+    """Samples at the same time (to 1 ns) merge with their rows or-ed; node rows or-ed; the tube
+    united; merging what is there already adds nothing."""
+    a = Selection(np.zeros((2, 3)), np.zeros((2, 8)), [0.1, 0.2], [[1, 0, 0], [0, 0, 0]], np.zeros((2, 8)),
+                  [0.5], [[0, 1, 0]], [0.1])
+    b = Selection(np.eye(2, 3), np.zeros((2, 8)), [0.2 + 1e-12, 0.3], [[0, 0, 1], [0, 1, 0]], np.zeros((2, 8)),
+                  [], np.zeros((0, 3)), [0.1, 0.2])
+    m = a.merged(b)
+    np.testing.assert_allclose(m.contact, [0.1, 0.2, 0.3])
+    np.testing.assert_array_equal(m.contact_torque, [[1, 0, 0], [0, 0, 1], [0, 1, 0]])
+    np.testing.assert_array_equal(m.node_torque, np.eye(2, 3))
+    np.testing.assert_allclose(m.tube, [0.1, 0.2])
+    assert m.rows() == a.rows() + b.rows() - 1  # the tube point at 0.1 is in both
+    assert m.merged(a).rows() == m.rows() and len(m.merged(b).contact) == 3
+    with pytest.raises(ValueError, match="2 rows for 1 contact samples"):
+        Selection(np.zeros((2, 3)), np.zeros((2, 8)), [0.1], np.zeros((2, 3)), np.zeros((1, 8)), [], np.zeros((0, 3)), [])
