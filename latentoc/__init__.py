@@ -14,16 +14,16 @@ Every error about the input is a :class:`LatentocError`.
 
 from .version import __version__
 
-# ``latentoc.solve`` and ``latentoc.sweep`` are the functions below; their modules stay importable
-# by name (``from latentoc.solve import SOLVERS``). The modules are imported first, so the
-# functions are bound last.
-from . import solve as _solve_module  # noqa: F401
+# ``latentoc.sweep`` is the function below; its module stays importable by name
+# (``from latentoc.sweep import format_table``). The module is imported first, so the function
+# is bound last.
 from . import sweep as _sweep_module  # noqa: F401
 from .api import solve
 from .dynamics import SymbolicModel
 from .errors import LatentocError
 from .gpdm import GPDM, GPDMSettings, learn_gpdm
-from .problem import Problem, load_problem, problem_names
+from .problem import Problem
+from .problem_files import load_problem, problem_names
 from .results import Result, load_result
 from .robots import load_robot
 from .sweep import SweepResult, sweep

@@ -3,9 +3,10 @@ from __future__ import annotations
 
 from .gpdm import GPDM
 from .interrupts import watching
+from .kind import Solution
+from .kinds import kind_of
 from .problem import Problem
 from .results import Result
-from .solve import Solution, solver_for
 
 __all__ = ["solve"]
 
@@ -20,7 +21,8 @@ def solve(problem: Problem, *, method: str = "latent", joint_range_deg: float | 
     smaller tube, whose optimum the solve starts from. ``verbose``: Ipopt's own log.
     Input that cannot be solved raises :class:`~latentoc.errors.SolveError` before any work;
     Ctrl-C raises KeyboardInterrupt, also when the solver swallowed it (:mod:`latentoc.interrupts`)."""
+    kind = kind_of(problem.kind)
     with watching():
-        solution = solver_for(problem.kind)(problem, method=method, joint_range_deg=joint_range_deg, gpdm=gpdm,
-                                            verbose=verbose, warm_start=warm_start)
+        solution = kind.solve(problem, method=method, joint_range_deg=joint_range_deg, gpdm=gpdm, verbose=verbose,
+                              warm_start=warm_start)  # type: ignore[arg-type]  # a Result carries .warm as a Solution does
     return Result.from_solution(solution, problem)

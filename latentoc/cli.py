@@ -14,34 +14,26 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from importlib import import_module
 from pathlib import Path
 from typing import Any
 
-from .errors import LatentocError, SweepError
-from .files import check_out_dir
+from . import commands
+from .errors import LatentocError
+from .kinds import KINDS
 
 __all__ = ["main"]
 
 
-def _tube_arg(text: str) -> float | str:
-    from .problem import parse_tube
-    value, relative = parse_tube(text)  # ProblemError (a ValueError) -> argparse message
-    return text if relative else value
-
-
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="latentoc", description="Motion optimisation in a GPDM latent space "
-                                                            "(Kang & Park 2015).")
-    sub = p.add_subparsers(dest="command", required=True)
-
+def _solve_arguments(sub: Any) -> None:
+    """The ``solve`` command's arguments."""
     s = sub.add_parser("solve", help="solve a problem and write result.json, trajectory.npz, gpdm.npz")
     s.add_argument("problem", help="problem name (see `list`) or path to a .toml file")
     s.add_argument("--tube", type=str, default=None, help='delta: a number, or "<k>x" relative (default: the problem\'s)')
     s.add_argument("--latent-dim", type=int, default=None)
     s.add_argument("--control-points", type=int, default=None)
     s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
-    s.add_argument("--method", choices=["latent", "joint-range"], default="latent")
+    s.add_argument("--method", choices=list(dict.fromkeys(m for k in KINDS.values() for m in k.methods)),
+                   default="latent", help="a method of the problem's kind (latentoc.kinds)")
     s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>-<method>)")
     s.add_argument("--quiet", action="store_true", help="no progress display")
@@ -51,6 +43,9 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--gpdm", type=Path, default=None,
                    help="a GPDM written by `learn` (its gpdm.npz) instead of learning the problem's")
 
+
+def _learn_arguments(sub: Any) -> None:
+    """The ``learn`` command's arguments."""
     ln = sub.add_parser("learn", help="learn a GPDM from a motion file: gpdm.npz, learn.json (and figures)")
     ln.add_argument("file", type=Path, help="the motion: .csv (t and joint columns), .npz (t, q, joint_names) or .amc")
     ln.add_argument("--robot", required=True, help="a robot name (latentoc.robots) or the path of a URDF file")
@@ -65,27 +60,42 @@ def _parser() -> argparse.ArgumentParser:
     ln.add_argument("--stop", type=int, default=None, help="one past the last frame")
     ln.add_argument("--fps", type=float, default=120.0, help="frame rate of an .amc motion (default 120)")
 
+
+def _plot_arguments(sub: Any) -> None:
+    """The ``plot`` command's arguments."""
     pl = sub.add_parser("plot", help="every figure of a result folder, from its files alone")
     pl.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz, gpdm.npz)")
     pl.add_argument("--format", choices=["png", "pdf", "svg"], default="png")
     pl.add_argument("--out", type=Path, default=None, help="output folder (default: RESULT/plots)")
     pl.add_argument("--no-gif", action="store_true", help="no motion.gif")
 
+
+def _view_arguments(sub: Any) -> None:
+    """The ``view`` command's arguments."""
     vw = sub.add_parser("view", help="the 3-D view of a result: one self-contained HTML page with the animation")
     vw.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz)")
     vw.add_argument("--html", type=Path, default=None, help="the page to write (default: RESULT/view.html)")
     vw.add_argument("--rate", type=float, default=50.0, help="animation frames per second of motion time (default 50)")
 
+
+def _notebooks_arguments(sub: Any) -> None:
+    """The ``notebooks`` command's arguments."""
     nbk = sub.add_parser("notebooks", help="run the notebooks in place: their committed outputs, and what made them")
     nbk.add_argument("names", nargs="*", help="notebooks by name or number (default: all)")
     nbk.add_argument("--stale", action="store_true", help="only those whose code or inputs changed since their run")
 
+
+def _list_arguments(sub: Any) -> None:
+    """The ``list`` command's arguments (and ``show``'s)."""
     ls = sub.add_parser("list", help="list the packaged problems (or, with --robots, the robot names)")
     ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
     ls.add_argument("--robots", action="store_true", help="the robot names a problem's `robot` or `learn --robot` takes")
     sh = sub.add_parser("show", help="a problem's resolved settings, one key per line")
     sh.add_argument("problem")
 
+
+def _sweep_arguments(sub: Any) -> None:
+    """The ``sweep`` command's arguments."""
     w = sub.add_parser("sweep", help="tube sweep (and joint-range baseline), a table like the paper's Table 2")
     w.add_argument("problem")
     w.add_argument("--tubes", nargs="*", default=None, help="tubes (numbers or <k>x); default: the problem's")
@@ -101,12 +111,18 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--plots", action="store_true", help="also write OUT/gain_vs_tube.png")
     w.add_argument("--quiet", action="store_true", help="no progress display")
 
+
+def _start_poses_arguments(sub: Any) -> None:
+    """The ``start-poses`` command's arguments."""
     sp = sub.add_parser("start-poses", help="end-effector distances of new start poses vs tube (Sect. 4.1.4)")
     sp.add_argument("problem")
     sp.add_argument("--tubes", nargs="*", default=None)
     sp.add_argument("--latent-dim", type=int, default=None)
     sp.add_argument("--out", type=Path, default=None)
 
+
+def _reproduce_arguments(sub: Any) -> None:
+    """The ``reproduce`` command's arguments."""
     r = sub.add_parser("reproduce", help="the paper's Tables 2, 3, 4, 6 and Fig. 5, ours beside the paper's")
     r.add_argument("--quick", action="store_true", help="the arm's tables and Fig. 5 only (no OMPL, no jump)")
     r.add_argument("--figures", action="store_true",
@@ -116,293 +132,31 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md")
     r.add_argument("--quiet", action="store_true", help="no progress display")
 
+
+def _bench_arguments(sub: Any) -> None:
+    """The ``bench`` command's arguments."""
     b = sub.add_parser("bench", help="run latentoc.benchmarks.<NAME>_bench")
     b.add_argument("name")
     b.add_argument("rest", nargs=argparse.REMAINDER)
+
+
+_ARGUMENTS = (_solve_arguments, _learn_arguments, _plot_arguments, _view_arguments, _notebooks_arguments,
+              _list_arguments, _sweep_arguments, _start_poses_arguments, _reproduce_arguments, _bench_arguments)
+
+#: command name -> its implementation (:mod:`latentoc.commands`)
+COMMANDS = {"plot": commands.cmd_plot, "view": commands.cmd_view, "notebooks": commands.cmd_notebooks,
+            "list": commands.cmd_list, "show": commands.cmd_show, "learn": commands.cmd_learn,
+            "solve": commands.cmd_solve, "sweep": commands.cmd_sweep, "reproduce": commands.cmd_reproduce,
+            "start-poses": commands.cmd_start_poses, "bench": commands.cmd_bench}
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="latentoc", description="Motion optimisation in a GPDM latent space "
+                                                            "(Kang & Park 2015).")
+    sub = p.add_subparsers(dest="command", required=True)
+    for add in _ARGUMENTS:
+        add(sub)
     return p
-
-
-def _overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
-    """The problem settings given on the command line (those not None)."""
-    values = {"tube": _tube_arg(args.tube) if getattr(args, "tube", None) is not None else None,
-              "latent_dim": getattr(args, "latent_dim", None), "control_points": getattr(args, "control_points", None),
-              "hessian": getattr(args, "hessian", None)}
-    return {k: values[k] for k in names if values[k] is not None}
-
-
-def _cmd_learn(args: argparse.Namespace) -> int:
-    from .learn import learn_file
-
-    if args.stride < 1 or args.latent_dim < 1:
-        raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
-    check_out_dir(args.out)
-    learned, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
-                                plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
-                                start=args.start, stop=args.stop, fps=args.fps)
-    s = learned.summary()
-    demo = s["demonstration"]
-    print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
-          f"{len(demo['joints'])} joints" + (f", {len(demo['locked_joints'])} locked" if demo["locked_joints"] else "")
-          + (", resampled" if demo["resampled"] else "") + (f", clipped {demo['clipped']}" if demo["clipped"] else ""))
-    report = s["learning"]
-    ended = "" if report is None else " (converged)" if report["converged"] else f" (not converged: {report['message']})"
-    print(f"  GPDM d = {s['latent_dim']} on {s['learned_frames']} frames in {s['learning_time_s']:.2f} s{ended}")
-    print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
-          f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
-    print("  wrote " + ", ".join(str(p) for p in paths))
-    return 0
-
-
-def _cmd_plot(args: argparse.Namespace) -> int:
-    from .plots import plot_solution
-
-    paths = plot_solution(args.result, gif=not args.no_gif, out_dir=args.out, format=args.format)
-    print(f"wrote {len(paths)} figures to {paths[0].parent}: " + ", ".join(p.name for p in paths))
-    return 0
-
-
-def _cmd_view(args: argparse.Namespace) -> int:
-    from .viewer import write_html
-
-    if not args.rate > 0:
-        raise LatentocError(f"--rate must be positive, got {args.rate}")
-    path = write_html(args.result, args.html, rate_hz=args.rate)
-    print(f"wrote {path} (open it in a browser; no server needed)")
-    return 0
-
-
-def _cmd_notebooks(args: argparse.Namespace) -> int:
-    import time
-
-    try:
-        from .notebooks import check, notebook_paths, run_notebook
-        import nbclient  # noqa: F401  (the dev extra's, with nbmake)
-    except ImportError:
-        raise LatentocError("running the notebooks needs nbclient: pip install -e '.[dev]'") from None
-
-    for path in notebook_paths(args.names):
-        if args.stale and not check(path):
-            continue
-        t0 = time.perf_counter()
-        meta = run_notebook(path)
-        print(f"ran {path} in {time.perf_counter() - t0:.0f} s ({len(meta['inputs'])} inputs recorded)", flush=True)
-        _warn_uncommitted(meta["inputs"])
-    return 0
-
-
-def _warn_uncommitted(inputs: dict[str, str]) -> None:
-    from .provenance import uncommitted
-
-    dirty = uncommitted(inputs)
-    if dirty:
-        print(f"latentoc: warning: made from uncommitted changes to {', '.join(dirty)}: on a clean clone the "
-              "outputs are stale until those are committed as they are", file=sys.stderr)
-
-
-def _cmd_list(args: argparse.Namespace) -> int:
-    from .problem import describe_problem, load_problem, problem_names
-    if args.robots:
-        from .robots import robot_names
-        print("\n".join(robot_names()))
-        return 0
-    for name in problem_names():
-        problem = load_problem(name)
-        print(describe_problem(problem) + "\n" if args.verbose else f"{name:24s} {problem.description}")
-    return 0
-
-
-def _cmd_show(args: argparse.Namespace) -> int:
-    from .problem import describe_problem, load_problem
-    print(describe_problem(load_problem(args.problem)))
-    return 0
-
-
-def summary(r: Any) -> str:
-    """The lines ``solve`` prints about a :class:`~latentoc.results.Result`."""
-    d = r.details
-    lines = [f"{r.problem} ({r.method}): {r.status} after {r.iterations} iterations",
-             f"  cost {r.cost_initial:.3f} -> {r.cost:.3f}  (gain {r.gain_pct:.2f} %)"]
-    if r.tube is not None:
-        lines.append(f"  tube delta {r.tube.delta:.4g} ({r.tube.spec}; {r.tube.relative:.3g} x noise), "
-                     f"max violation on 1 kHz grid {r.violations['tube']:.3g}")
-    if d.get("joint_range_deg") is not None:
-        lines.append(f"  joint range +-{d['joint_range_deg']:g} deg")
-    if d.get("max_dynamics_residual") is not None:  # contact problems: the exported motion's 1 kHz checks
-        lines.append(f"  1 kHz checks: base residual {d['max_dynamics_residual']:.2g} body weights, min normal force "
-                     f"{d['min_normal_force']:.1f} N, friction ratio {d['max_friction_ratio']:.3f} "
-                     f"(mu {d['friction']:g}), centre-of-pressure margin {d.get('cop_margin_loaded', d['cop_margin']):.3f}"
-                     f" m, ZMP margin {d['zmp_margin']:.3f} m, COM margin {d['com_margin']:.3f} m, "
-                     f"torque-limit excess {d['max_torque_violation']:.2g} N m")
-        if d.get("toe_slip") is not None:
-            lines.append(f"  toe tip: forward travel {d['toe_displacement']:.3f} m; in contact slip "
-                         f"{100 * d['toe_slip']:.2f} cm, height up to {100 * d['max_toe_height']:.2f} cm")
-        if d.get("eq33_feet_distance") is not None:
-            lines.append(f"  Eq. 33 feet distance (both toe tips) {d['eq33_feet_distance']:.3f} m")
-    t = r.times
-    checks = f", 1 kHz checks {t.check_s:.2f} s" if t.check_s else ""
-    total = f"; in all {t.total_s:.2f} s" if t.total_s else ""
-    lines.append(f"  times: gpdm {t.gpdm_s:.2f} s, compile {t.compile_s:.2f} s, build {t.build_s:.2f} s, solve {t.solve_s:.2f} s"
-                 f"{checks}{total}; quadrature error {d.get('quadrature_error', 0.0):.2e}")
-    return "\n".join(lines)
-
-
-def _cmd_solve(args: argparse.Namespace) -> int:
-    from .api import solve
-    from .problem import load_problem
-
-    problem = load_problem(args.problem, **_overrides(args, "tube", "latent_dim", "control_points", "hessian"))
-    out = check_out_dir(args.out if args.out is not None else Path("out") / f"{problem.name}-{args.method}")
-    gpdm = None
-    if args.gpdm is not None:
-        from .learn import load_learned_gpdm
-        gpdm = load_learned_gpdm(args.gpdm)
-    r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose, gpdm=gpdm)
-    print(summary(r))
-    if not r.success and not args.keep_failed:
-        print("latentoc: solve did not succeed; nothing written (use --keep-failed to write anyway)", file=sys.stderr)
-        return 1
-    paths = r.save(out)
-    print("  wrote " + ", ".join(str(p) for p in paths))
-    if args.plots:
-        from .plots import plot_solution
-
-        figures = plot_solution(out, gif=True)
-        print(f"  plots: {len(figures)} figures in {out / 'plots'}")
-    return 0 if r.success else 1
-
-
-def _executor(args: argparse.Namespace) -> Any:
-    """A Dask client for --workers / --scheduler, else None (serial)."""
-    if args.workers is None and args.scheduler is None:
-        return None
-    if args.workers is not None and args.scheduler is not None:
-        raise SweepError("give --workers (a local cluster) or --scheduler (an existing one), not both")
-    if args.workers is not None and args.workers < 1:
-        raise SweepError(f"--workers must be a positive number of processes, got {args.workers}")
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise SweepError("--workers and --scheduler need Dask: pip install 'latentoc[distributed]'") from None
-    if args.scheduler is not None:
-        try:
-            return Client(args.scheduler, timeout=10)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise SweepError(f"no Dask scheduler at {args.scheduler}: {exc}") from None
-    return Client(LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None))
-
-
-def _cmd_sweep(args: argparse.Namespace) -> int:
-    from .problem import load_problem
-    from .sweep import format_table, sweep, write_sweep
-
-    problem = load_problem(args.problem, **_overrides(args, "latent_dim", "hessian"))
-    if args.tubes == [] or args.ranges == []:
-        raise SweepError(f"--{'tubes' if args.tubes == [] else 'ranges'} needs at least one value (leave it out "
-                         "for the problem's own)")
-    tubes = problem.sweep_tubes if args.tubes is None else [_tube_arg(t) for t in args.tubes]
-    ranges: list[float] = []
-    if args.baseline == "joint-range":
-        ranges = problem.sweep_ranges if args.ranges is None else args.ranges
-    out = args.out
-    check_out_dir(out if out is not None else Path("out") / f"{problem.name}-sweep")
-    client = _executor(args)
-    try:
-        outcome = sweep(problem, tubes, client, baseline_ranges=ranges, out=out, resume=args.resume,
-                        warm_start=not args.cold, progress=None if args.quiet else lambda line: print(line, flush=True))
-    finally:
-        if client is not None:
-            cluster = getattr(client, "cluster", None)
-            client.close()
-            if cluster is not None and args.workers is not None:
-                cluster.close()
-    print(format_table(outcome.results))
-    if out is not None:
-        meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "workers": args.workers,
-                "scheduler": args.scheduler, "warm_start": client is None and not args.cold}
-        print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))
-    if args.plots and outcome.results:
-        from .plots import plot_gain_vs_tube, save
-
-        folder = out if out is not None else Path("out") / f"{problem.name}-sweep"
-        print("wrote " + str(save(plot_gain_vs_tube(outcome.results, title=f"{problem.name}: gain vs tube"),
-                                  folder / "gain_vs_tube.png")))
-    for f in outcome.failures:
-        print(f"latentoc: task {f.label} failed: {f.error}: {f.message}", file=sys.stderr)
-        if f.traceback and not f.input_error:
-            print(f.traceback, file=sys.stderr)
-    for r in outcome.unsuccessful:
-        what = f"tube {r.tube.spec}" if r.tube is not None else f"joint range {r.details.get('joint_range_deg')}"
-        print(f"latentoc: {what} did not succeed: {r.details.get('rejected') or r.status} (--resume solves it "
-              "again)", file=sys.stderr)
-    return 1 if outcome.failures or outcome.unsuccessful else 0
-
-
-def _cmd_start_poses(args: argparse.Namespace) -> int:
-    from .problem import load_problem
-    from .results import write_json
-    from .robots import load_robot
-    from .solve import resolve_tube
-    from .start_poses import start_pose_distances
-
-    problem = load_problem(args.problem, **_overrides(args, "latent_dim"))
-    if args.out is not None:
-        check_out_dir(args.out)
-    if problem.kind != "latent-min-torque":
-        raise LatentocError(f"start-poses is for latent-min-torque problems (Sect. 4.1.4), {problem.name!r} is "
-                            f"a {problem.kind} problem")
-    from .min_torque_problem import problem_gpdm
-
-    gp, _ = problem_gpdm(problem)
-    specs = problem.start_pose_tubes if args.tubes is None else [_tube_arg(t) for t in args.tubes]
-    ref = gp.tube_size()
-    deltas = [resolve_tube(s, ref) for s in specs]
-    rows = start_pose_distances(gp, load_robot(problem.robot), problem.start_pose_frame, deltas)
-    print(f"start poses of {problem.name} (relative tubes x tube_training = {ref:.4g}), frame {problem.start_pose_frame}")
-    print("| tube | delta | latent dist | translational dist (m), Eq. 31 | pose dist, Eq. 32 |")
-    print("|---|---|---|---|---|")
-    for s, r in zip(specs, rows):
-        print(f"| {s} | {r['tube']:.4g} | {r['latent_distance']:.4f} | {r['translational_distance']:.4f} "
-              f"| {r['pose_distance']:.4f} |")
-    if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        write_json(args.out / "start_poses.json", {"problem": problem.name, "tube_training": ref,
-                                                    "specs": [str(s) for s in specs], "rows": rows})
-        print(f"wrote {args.out / 'start_poses.json'}")
-    return 0
-
-
-def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from .reproduce import report, reproduce
-    from .results import atomic_write
-
-    if args.figures:
-        from .readme_figures import make_figures
-
-        import json
-
-        written = make_figures()
-        print("wrote " + ", ".join(str(p) for p in written))
-        _warn_uncommitted(json.loads(written[-1].read_text())["inputs"])
-        return 0
-
-    if args.out.is_dir():
-        raise LatentocError(f"--out {args.out} is a folder; reproduce writes a Markdown file")
-    check_out_dir(args.out.parent, "--out's folder")
-    text = report(reproduce(quick=args.quick, budgets=args.budgets))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write(args.out, lambda f: f.write(text))
-    print(f"wrote {args.out}")
-    return 0
-
-
-def _cmd_bench(args: argparse.Namespace) -> int:
-    name = args.name.replace("-", "_")
-    try:
-        module = import_module(f"latentoc.benchmarks.{name}_bench")
-    except ModuleNotFoundError:
-        raise LatentocError(f"unknown benchmark {args.name!r}") from None
-    return int(module.main(args.rest) or 0)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -413,11 +167,8 @@ def main(argv: list[str] | None = None) -> int:
 
     was_quiet = quiet()
     set_quiet(was_quiet or getattr(args, "quiet", False))
-    commands = {"plot": _cmd_plot, "view": _cmd_view, "notebooks": _cmd_notebooks, "list": _cmd_list, "show": _cmd_show, "learn": _cmd_learn, "solve": _cmd_solve, "sweep": _cmd_sweep,
-                "reproduce": _cmd_reproduce,
-                "start-poses": _cmd_start_poses, "bench": _cmd_bench}
     try:
-        return commands[args.command](args)
+        return COMMANDS[args.command](args)
     except LatentocError as exc:
         print(f"latentoc: error: {exc}", file=sys.stderr)
         return 2

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
-from .problem import load_problem
+from .problem_files import load_problem
 from .results import Result
 
 __all__ = ["PAPER", "Reproduction", "reproduce", "report", "environment"]
@@ -103,11 +103,11 @@ class Reproduction:
 def reproduce(quick: bool = False, arm: str = "arm-raise", jump: str = "broad-jump",
               budgets: Sequence[float] = (10.0, 60.0, 300.0), say: Callable[[str], None] = print) -> Reproduction:
     """Run the experiments (module doc); ``quick``: the arm's tables and Fig. 5 only."""
-    from .sweep import sweep
-    from .min_torque_problem import problem_gpdm
+    from .min_torque.training import problem_gpdm
     from .robots import load_robot
-    from .solve import resolve_tube
     from .start_poses import start_pose_distances
+    from .sweep import sweep
+    from .tube import resolve_tube
 
     out = Reproduction()
     problem = load_problem(arm)

@@ -31,10 +31,11 @@ import numpy as np
 from .errors import ResultFileError
 from .files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
 from .gpdm import GPDM
+from .kind import Solution
 from .problem import Problem
-from .solve import Solution
+from .tube import TubeResult
 
-__all__ = ["Result", "Times", "TubeResult", "Environment", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
+__all__ = ["Result", "Times", "Environment", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
            "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",
            "HISTORY_KEYS"]
 
@@ -113,18 +114,6 @@ class Times:
 
 
 @dataclass(frozen=True)
-class TubeResult:
-    """The variance tube (Eq. 29): the spec, delta, delta x beta_3, tube_training (Eq. 30) and the
-    largest sigma^2 along the optimised path on the 1 kHz grid."""
-
-    spec: float | str
-    delta: float
-    relative: float
-    training: float
-    max_sigma2: float
-
-
-@dataclass(frozen=True)
 class Environment:
     """Where a result was computed: package versions, CPU, threads."""
 
@@ -197,12 +186,8 @@ class Result:
 
     @classmethod
     def from_solution(cls, solution: Solution, problem: Problem) -> Result:
-        """A kind's :class:`~latentoc.solve.Solution` of ``problem`` in the schema."""
+        """A kind's :class:`~latentoc.kind.Solution` of ``problem`` in the schema."""
         r = solution.result
-        tube = None
-        if r.get("tube") is not None:
-            tube = TubeResult(spec=r["tube_spec"], delta=float(r["tube"]), relative=float(r["tube_relative"]),
-                              training=float(r["tube_training"]), max_sigma2=float(r["max_sigma2"]))
         unknown = set(solution.trajectory) - set(TRAJECTORY_KEYS)
         if unknown:
             raise KeyError(f"trajectory keys {sorted(unknown)} are not in latentoc.results.TRAJECTORY_KEYS")
@@ -213,7 +198,7 @@ class Result:
                    times=Times(gpdm_s=r.get("gpdm_time_s", 0.0), build_s=r.get("build_time_s", 0.0),
                                check_s=r.get("check_time_s", 0.0), total_s=r.get("total_time_s", 0.0),
                                compile_s=r.get("compile_time_s", 0.0), solve_s=r["solve_time_s"]),
-                   tube=tube, violations={k: float(v) for k, v in r["violations"].items()},
+                   tube=TubeResult.from_result(r), violations={k: float(v) for k, v in r["violations"].items()},
                    environment=Environment.current(), settings=dict(problem.settings),
                    details={"source": problem.source, **{k: v for k, v in r.items() if k not in _CORE_KEYS}},
                    convergence=[convergence_entry(c["phase"], c["round"], c["history"]) for c in r.get("convergence", [])],

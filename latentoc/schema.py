@@ -6,7 +6,9 @@ of its own settings), its ``name`` the problem's attribute and the keyword of
 ``load_problem(..., **overrides)``. Each check returns the value normalised (an int given for a
 float is a float) or raises ``ValueError`` with what the value must be; :meth:`Schema.parse`
 turns that, an unknown key, a key the kind does not read, or a missing required key into one
-:class:`~latentoc.errors.ProblemError` naming the key and the allowed ones.
+:class:`~latentoc.errors.ProblemError` naming the key and the allowed ones. A kind's checks that
+involve several settings (enough control points for the degree, files that exist) are the
+schema's ``check``.
 """
 from __future__ import annotations
 
@@ -166,11 +168,14 @@ def _checked(s: Setting, value: Any, where: str) -> Any:
 
 @dataclass(frozen=True)
 class Schema:
-    """The settings of one problem kind (module doc)."""
+    """The settings of one problem kind (module doc) and its ``check`` across settings
+    (``check(problem, where)`` raises a ProblemError naming ``where``; run on every load and
+    change of a problem, :class:`latentoc.problem.Problem`)."""
 
     kind: str
     settings: tuple[Setting | Table, ...]
     doc: str = ""
+    check: Callable[[Any, str], None] | None = field(default=None, compare=False)
     _by_key: dict[str, Setting | Table] = field(init=False, repr=False, compare=False)
     _by_name: dict[str, Setting | Table] = field(init=False, repr=False, compare=False)
 

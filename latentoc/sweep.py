@@ -2,7 +2,7 @@
 
 A sweep is a list of :class:`SweepTask`: a latent solve per tube, then, for the arm, a
 full-space baseline solve per joint range. Each task carries its problem as data
-(:meth:`~latentoc.problem.Problem.to_dict`) and :func:`run_task` returns the content of its result
+(:meth:`~latentoc.problem.Problem.to_dict`, :func:`~latentoc.problem_files.problem_from_dict`) and :func:`run_task` returns the content of its result
 files (:meth:`~latentoc.results.Result.files`), so a worker needs only the installed package.
 
 * Serial (``executor=None``): the tasks run in this process, in order; with ``warm_start`` each
@@ -35,10 +35,12 @@ from typing import Any
 
 from .api import solve
 from .errors import LatentocError, SweepError
-from .problem import Problem, parse_tube
+from .kinds import kind_of
+from .problem import Problem
+from .problem_files import problem_from_dict
 from .errors import ResultFileError
 from .results import RESULT_NAME, Result, atomic_write, load_result, write_files, write_json
-from .solve import tube_delta
+from .tube import parse_tube, resolve_tube
 
 __all__ = ["SweepTask", "SweepFailure", "SweepResult", "sweep", "sweep_tasks", "run_task", "format_table",
            "write_sweep", "summary_row", "no_worse_than_start"]
@@ -104,7 +106,7 @@ def sweep_tasks(problem: Problem, tubes: Sequence[float | str],
 
 def run_task(task: SweepTask) -> dict[str, bytes]:
     """Solve one task (in any process: the problem comes as data); its result files' content."""
-    problem = Problem.from_dict(task.problem)
+    problem = problem_from_dict(task.problem)
     if task.method == "latent":
         problem = problem.replace(tube=task.tube)
     return solve(problem, method=task.method, joint_range_deg=task.joint_range_deg).files()
@@ -179,7 +181,7 @@ def _serial(problem: Problem, tasks: list[SweepTask], out: str | Path | None, wa
             if task.method == "latent":
                 p = problem.replace(tube=task.tube)
                 if warm_start and solved:
-                    delta = tube_delta(p, task.tube)  # type: ignore[arg-type]
+                    delta = resolve_tube(task.tube, lambda: kind_of(p.kind).tube_reference(p))  # type: ignore[arg-type]
                     smaller = [s for s in solved if s[0] <= delta]
                     previous = max(smaller, key=lambda s: s[0])[1] if smaller else None
             r = solve(p, method=task.method, joint_range_deg=task.joint_range_deg, warm_start=previous)

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from result_factory import make_result
 
-from latentoc.solve import Solution
+from latentoc.kind import Solution
 
 COST_INITIAL = 1000.0
 
@@ -31,7 +31,10 @@ def solution(problem: Any, cost: float, *, success: bool = True, warm_start: boo
 def install(monkeypatch: Any, solver: Callable[..., Solution]) -> list[dict[str, Any]]:
     """Route every ``latentoc.solve`` to ``solver(problem, warm)``; returns the log of its calls
     (tube, whether warm)."""
+    import dataclasses
+
     import latentoc.api as api
+    from latentoc.kinds import kind_of
 
     calls: list[dict[str, Any]] = []
 
@@ -41,5 +44,5 @@ def install(monkeypatch: Any, solver: Callable[..., Solution]) -> list[dict[str,
         calls.append({"tube": problem.tube, "warm": warm is not None})
         return solver(problem, warm)
 
-    monkeypatch.setattr(api, "solver_for", lambda kind: kind_solver)
+    monkeypatch.setattr(api, "kind_of", lambda name: dataclasses.replace(kind_of(name), solve=kind_solver))
     return calls

@@ -6,7 +6,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.results import Environment, Result, Times, TubeResult
+from latentoc.results import Environment, Result, Times
+from latentoc.tube import TubeResult
 
 
 def make_result(model: pin.Model | None = None, n: int = 11, *, tube: float | None = 0.5, method: str = "latent",

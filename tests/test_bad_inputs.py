@@ -57,7 +57,7 @@ def test_a_npy_renamed_npz(tmp_path, capsys):
 
 
 def test_learn_out_a_file_fails_before_any_work(tmp_path, capsys, monkeypatch):
-    import latentoc.learn as learn
+    import latentoc.learned_motion as learn
 
     monkeypatch.setattr(learn, "demonstration_from_file", lambda *a, **k: pytest.fail("work began"))
     (tmp_path / "f").write_text("mine")
@@ -86,10 +86,10 @@ def test_sizes_beyond_the_memory_are_refused_up_front(tmp_path, capsys, old, new
 @pytest.fixture(scope="module")
 def arm():
     """arm-raise-small and its training frames (what its GPDM is learned from)."""
-    from latentoc.min_torque_problem import training_motion
+    from latentoc.min_torque.training import training_frames
 
     problem = latentoc.load_problem("arm-raise-small")
-    return problem, training_motion(problem)[1]
+    return problem, training_frames(problem)[1]
 
 
 @pytest.mark.parametrize("data, d, match", [

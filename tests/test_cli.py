@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from latentoc.cli import main, summary
+from latentoc.cli import main
+from latentoc.commands import summary
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -21,7 +22,8 @@ def test_list(capsys):
 
 
 def test_list_verbose_and_show_print_the_resolved_settings(capsys):
-    from latentoc.problem import describe_problem, load_problem
+    from latentoc.problem import describe_problem
+    from latentoc.problem_files import load_problem
 
     assert main(["show", "broad-jump"]) == 0
     assert capsys.readouterr().out == describe_problem(load_problem("broad-jump")) + "\n"
@@ -74,9 +76,9 @@ def test_module_entry_point_subprocess(tmp_path):
 def test_a_bug_exits_1_with_its_traceback(tmp_path):
     """An exception that is not a LatentocError is a bug: its traceback, exit code 1."""
     out = tmp_path / "o"
-    code = ("import sys\nimport latentoc.min_torque_problem\nfrom latentoc.solve import SOLVERS\n"
+    code = ("import dataclasses\nimport sys\nfrom latentoc.kinds import KINDS\n"
             "def broken(problem, **kw):\n    return 1 / 0\n"
-            "SOLVERS['latent-min-torque'] = broken\n"
+            "KINDS['latent-min-torque'] = dataclasses.replace(KINDS['latent-min-torque'], solve=broken)\n"
             f"from latentoc.cli import main\nsys.exit(main(['solve', 'arm-raise-small', '--quiet', '--out', {str(out)!r}]))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert not out.exists()

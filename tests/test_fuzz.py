@@ -16,7 +16,7 @@ from result_factory import make_result
 import latentoc
 from latentoc.cli import main
 from latentoc.errors import ResultFileError
-from latentoc.problem import problems_dir
+from latentoc.problem_files import problems_dir
 
 FUZZ = settings(max_examples=60, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
@@ -85,7 +85,7 @@ NPZ_ARRAYS = st.dictionaries(
 def test_fuzzed_motion_npz_files(tmp_path, capsys, monkeypatch, arrays, cut, junk):
     """An NPZ motion of random arrays, truncated, or replaced by bytes: `learn` reads it on the arm
     or exits 2 naming the file, writing nothing (learning itself is stood in for)."""
-    import latentoc.learn as learn
+    import latentoc.learned_motion as learn
 
     class Accepted(Exception):
         pass
@@ -183,7 +183,7 @@ def learned():
        side=st.sampled_from(["keep", "drop", "junk"]))
 def test_fuzzed_cached_models_are_learned_again(tmp_path, capsys, monkeypatch, learned, cut, flips, junk, op, side):
     """A cached gpdm_*.npz truncated, flipped, replaced by bytes or by another model, with its
-    checksum kept, dropped or damaged: learned_gpdm returns the model of the data (learning stood
+    checksum kept, dropped or damaged: cached_gpdm returns the model of the data (learning stood
     in for by the known model) with at most one warning line, never an exception."""
     import latentoc.gpdm.cache as cache
 
@@ -191,7 +191,7 @@ def test_fuzzed_cached_models_are_learned_again(tmp_path, capsys, monkeypatch, l
     monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path / uuid.uuid4().hex))
     monkeypatch.setattr(cache, "learn_gpdm", lambda y, s: model)
     path = cache.model_path(Y, settings)
-    cache.learned_gpdm(Y, settings)
+    cache.cached_gpdm(Y, settings)
     raw = bytearray(path.read_bytes())
     if op == "truncate":
         raw = raw[:cut % len(raw)]
@@ -212,6 +212,6 @@ def test_fuzzed_cached_models_are_learned_again(tmp_path, capsys, monkeypatch, l
     elif side == "junk":
         checksum.write_bytes(junk)
     capsys.readouterr()
-    got = cache.learned_gpdm(Y, settings)
+    got = cache.cached_gpdm(Y, settings)
     assert np.array_equal(got.X, model.X) and capsys.readouterr().err.count("\n") <= 1
-    assert np.array_equal(cache.learned_gpdm(Y, settings).X, model.X) and capsys.readouterr().err == ""
+    assert np.array_equal(cache.cached_gpdm(Y, settings).X, model.X) and capsys.readouterr().err == ""

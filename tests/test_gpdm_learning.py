@@ -72,12 +72,12 @@ def test_the_arms_minimum_is_the_previous_learners():
     Newton on a forward-difference Hessian, commit 8f78e4c) recorded: Eq. 16 within 1e-8 relative, and
     both points, polished by Newton steps on a central-difference Hessian, the same latent points to
     1e-6 after the best rotation (the previous learner stopped 2e-4 from it)."""
-    from latentoc.min_torque_problem import gpdm_settings, training_motion
-    from latentoc.problem import load_problem
+    from latentoc.min_torque.training import gpdm_settings, training_frames
+    from latentoc.problem_files import load_problem
 
     problem = load_problem("arm-raise")
     ref = np.load(Path(__file__).with_name("gpdm_previous_minimum_arm.npz"))
-    Q = training_motion(problem)[1]
+    Q = training_frames(problem)[1]
     np.testing.assert_array_equal(Q, ref["Y"])
     model = learn_gpdm(Q, gpdm_settings(problem))
     assert model.learning.converged

@@ -86,7 +86,7 @@ def test_sweep_interrupted_stops_at_once(tmp_path, capsys, monkeypatch):
 
 
 def test_learn_interrupted_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
-    import latentoc.learn as learn
+    import latentoc.learned_motion as learn
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt

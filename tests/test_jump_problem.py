@@ -10,8 +10,8 @@ import latentoc.jump.problem as jp
 from latentoc.jump.settings import JumpSettings
 from latentoc.jump.solve import JumpSolution, solve_jump
 from latentoc.nlp.ipopt import IpoptResult
-from latentoc.problem import load_problem
-from latentoc.solve import SolveError
+from latentoc.problem_files import load_problem
+from latentoc.errors import SolveError
 
 
 def _with_options(**options):

@@ -80,8 +80,8 @@ def test_quick_solve_verifies():
     1 kHz export checked by numeric Pinocchio (base rows balanced, ballistic flight, symmetric)."""
     import dataclasses
 
-    from latentoc.problem import load_problem
-    from latentoc.solve import solve
+    from latentoc.problem_files import load_problem
+    from latentoc.jump.problem import solve_jump_problem as solve
 
     p = load_problem("broad-jump")
     p = dataclasses.replace(p, options={**p.options, "torque_limits": False, "polygon": False})

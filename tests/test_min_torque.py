@@ -1,4 +1,4 @@
-"""The minimum-torque NLP (latentoc.kinds.min_torque) against the same NLP composed as one CasADi
+"""The minimum-torque NLP (latentoc.min_torque.nlp) against the same NLP composed as one CasADi
 SX expression: the GP mean and CasADi's forward mode for yd, ydd (Eq. 26-28), SymbolicModel.rnea,
 sigma^2 from the GPDM's own variance Function (Eq. 19), differentiated by CasADi."""
 
@@ -10,10 +10,13 @@ import pinocchio as pin
 import pytest
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.kinds.min_torque import MinTorqueSettings, ipopt_options, joint_range_nlp, latent_nlp, sampled_motion
+from latentoc.min_torque.export import sampled_motion
+from latentoc.min_torque.nlp import ipopt_options, joint_range_nlp, latent_nlp
+from latentoc.min_torque.settings import MinTorqueSettings
 from latentoc.latent import GPLayer, IdentityLayer
-from latentoc.min_torque_problem import TRAINING_MOTIONS, problem_gpdm, training_motion
-from latentoc.problem import load_problem
+from latentoc.min_torque.training import problem_gpdm, training_frames
+from latentoc.motions import TRAINING_MOTIONS
+from latentoc.problem_files import load_problem
 from latentoc.robots import load_robot
 from latentoc.spline_path import SplinePath, constraint_times, gauss_legendre_nodes, trapezoid_cost
 
@@ -25,7 +28,7 @@ RTOL = 1e-8  # relative to the largest entry of each compared block
 def arm():
     p = load_problem("arm-raise-small")
     gp, _ = problem_gpdm(p)
-    t, _ = training_motion(p)
+    t, _ = training_frames(p)
     robot = load_robot(p.robot)
     return gp, robot, SymbolicModel(robot), t
 

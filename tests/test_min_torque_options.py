@@ -1,4 +1,4 @@
-"""The minimum-torque kind's options (latentoc.kinds.objectives, .limits, .goal) against independent numbers:
+"""The minimum-torque kind's options (latentoc.min_torque.objectives, .limits, .goal) against independent numbers:
 each objective's block against numpy and Pinocchio's numeric RNEA, the goal rows against numeric forward
 kinematics, the free end path's tie, the URDF limits, and the assembled rows and their exact Jacobian and
 Hessian of the Lagrangian (latent NLP on the UR5) against central differences."""
@@ -9,10 +9,12 @@ import pytest
 
 from latentoc.dynamics import SymbolicModel
 from latentoc.gpdm import GPDMSettings, learn_gpdm
-from latentoc.kinds.goal import EndGoal, FreeEndPath, goal_block, goal_error
-from latentoc.kinds.limits import Limits, torque_limit_vector
-from latentoc.kinds.min_torque import MinTorqueSettings, joint_range_nlp, latent_nlp, sampled_motion
-from latentoc.kinds.objectives import Objective, velocity_block
+from latentoc.min_torque.export import sampled_motion
+from latentoc.min_torque.goal import EndGoal, FreeEndPath, goal_block, goal_error
+from latentoc.min_torque.limits import Limits, torque_limit_vector
+from latentoc.min_torque.nlp import joint_range_nlp, latent_nlp
+from latentoc.min_torque.objectives import Objective, velocity_block
+from latentoc.min_torque.settings import MinTorqueSettings
 from latentoc.latent import GPLayer
 from latentoc.robots import load_robot
 from latentoc.spline import BSpline

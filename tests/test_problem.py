@@ -9,8 +9,11 @@ import pytest
 
 from latentoc.errors import LatentocError, ProblemError
 from latentoc.gpdm import GPDMSettings
-from latentoc.min_torque_problem import training_motion
-from latentoc.problem import Problem, describe_problem, kind_schema, load_problem, parse_tube, problem_names
+from latentoc.kinds import kind_of
+from latentoc.min_torque.training import training_frames
+from latentoc.problem import describe_problem
+from latentoc.problem_files import load_problem, problem_from_dict, problem_names
+from latentoc.tube import parse_tube
 
 
 def test_packaged_problems_load():
@@ -28,7 +31,7 @@ def test_load_by_path_and_stride(tmp_path):
     q.write_text(src.read_text().replace('name = "arm-raise-small"\n', ""))
     p = load_problem(str(q))
     assert p.name == "mine"
-    t, Q = training_motion(p)
+    t, Q = training_frames(p)
     assert t[0] == 0 and abs(t[-1] - 2.9) < 1e-9 and Q.shape == (len(t), 7) and len(t) == 30
 
 
@@ -130,11 +133,11 @@ def test_problem_as_data_round_trip():
     """A problem travels to a sweep's worker as data and comes back equal, checked again."""
     for name in ("arm-raise", "broad-jump"):
         p = load_problem(name, tube="3x")
-        assert Problem.from_dict(p.to_dict()) == p
+        assert problem_from_dict(p.to_dict()) == p
     bad = load_problem("arm-raise-small").to_dict()
     bad["settings"]["duration"] = -1.0
     with pytest.raises(ProblemError, match="duration"):
-        Problem.from_dict(bad)
+        problem_from_dict(bad)
 
 
 def test_show_prints_every_resolved_setting():
@@ -142,7 +145,7 @@ def test_show_prints_every_resolved_setting():
     the file's, or the default where the file leaves the key out."""
     p = load_problem("arm-raise")
     text = describe_problem(p)
-    rows = kind_schema(p.kind).describe(p.settings)
+    rows = kind_of(p.kind).schema.describe(p.settings)
     assert len(text.splitlines()) == 2 + len(rows)
     assert 'latent.tube = "5x"' in text and "gpdm.training_stride = 6" in text
     assert f"gpdm.seed = {GPDMSettings().seed}" in text  # not in the file: GPDMSettings' default

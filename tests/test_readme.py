@@ -21,7 +21,7 @@ def test_first_two_commands_are_what_ci_runs():
 
 
 def test_main_job_command_follows_and_names_a_known_problem():
-    from latentoc.problem import problem_names
+    from latentoc.problem_files import problem_names
 
     readme = (ROOT / "README.md").read_text()
     main_job = _code_blocks(readme)[1][0]

@@ -9,10 +9,10 @@ import pytest
 from result_factory import make_result
 
 from latentoc.errors import LatentocError, ResultFileError
+from latentoc.kind import Solution
 from latentoc.results import (GPDM_NAME, RESULT_NAME, SCHEMA_VERSION, TRAJECTORY_KEYS, TRAJECTORY_NAME, Result,
-                              TubeResult,
                               atomic_write, load_result)
-from latentoc.solve import Solution
+from latentoc.tube import TubeResult
 
 
 def test_round_trip(tmp_path):

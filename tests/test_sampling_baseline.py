@@ -12,7 +12,8 @@ import pinocchio as pin
 import pytest
 
 from latentoc.baselines import sampling
-from latentoc.problem import load_problem
+from latentoc.min_torque.training import training_frames
+from latentoc.problem_files import load_problem
 from latentoc.robots import load_robot
 
 try:
@@ -62,7 +63,7 @@ def test_missing_ompl_names_the_extra(monkeypatch):
 
 
 def test_task_boundary_from_training_motion(task, problem):
-    _, Q = sampling._training_motion(problem)
+    _, Q = training_frames(problem)
     np.testing.assert_array_equal(task.q_start, Q[0])
     np.testing.assert_array_equal(task.q_goal, Q[-1])
     assert task.duration == pytest.approx(2.9)
@@ -158,7 +159,7 @@ def test_reported_cost_recomputed_with_rnea(result):
 _REPRO = """
 import json, sys
 from latentoc.baselines.sampling import plan, SamplingSettings
-from latentoc.problem import load_problem
+from latentoc.problem_files import load_problem
 r = plan(load_problem("arm-raise"), iterations=[60], settings=SamplingSettings(seed=int(sys.argv[1])))[0]
 print(json.dumps({"cost": r.cost_planner, "knots": r.knots.tolist(), "seeded": r.seeded}))
 """

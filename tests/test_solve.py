@@ -9,7 +9,7 @@ import pytest
 import latentoc
 from latentoc import load_problem, solve
 from latentoc.errors import ProblemError, SolveError
-from latentoc.min_torque_problem import problem_gpdm, training_motion
+from latentoc.min_torque.training import problem_gpdm, training_frames
 from latentoc.spline import BSpline
 
 pytestmark = pytest.mark.slow  # every test here solves
@@ -148,7 +148,7 @@ def test_tube_just_above_initial_keeps_the_training_path(arm_raise):
     q, qi = s.trajectory["q"], s.trajectory["q_initial"]
     dist = np.sqrt(((q[::10, None, :] - qi[None, :, :]) ** 2).sum(-1)).min(axis=1)
     assert np.degrees(dist.max()) < 0.5
-    _, Q_train = training_motion(problem)
+    _, Q_train = training_frames(problem)
     d_train = np.sqrt(((qi[::10, None, :] - Q_train[None, :, :]) ** 2).sum(-1)).min(axis=1)
     assert np.degrees(d_train.max()) < 5.0
 

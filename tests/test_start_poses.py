@@ -4,9 +4,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.problem import load_problem
+from latentoc.problem_files import load_problem
 from latentoc.robots import load_robot
-from latentoc.min_torque_problem import problem_gpdm
+from latentoc.min_torque.training import problem_gpdm
 from latentoc.start_poses import radial_direction, start_pose_distances, tube_boundary_point
 
 

@@ -42,7 +42,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import LatentocError
+from ..min_torque.limits import torque_limit_vector
+from ..min_torque.training import training_frames
 from ..problem import Problem
+from ..robots import load_robot
 
 __all__ = ["EXTRA", "OmplUnavailable", "require_ompl", "SamplingSettings", "ArmTask", "HermiteEdges",
            "SamplingResult", "KinodynamicRRTStar", "plan", "hermite_samples", "check_motion"]
@@ -103,10 +106,8 @@ class ArmTask:
     @classmethod
     def from_problem(cls, problem: Problem, velocity_factor: float = 2.0) -> ArmTask:
         """The task of a ``latent-min-torque`` problem (robot, duration, training end poses, limits)."""
-        from ..kinds.min_torque import torque_limit_vector
-        from ..robots import load_robot
         model = load_robot(problem.robot)
-        t, Q = (np.asarray(a, dtype=float) for a in _training_motion(problem))
+        t, Q = (np.asarray(a, dtype=float) for a in training_frames(problem))
         vmax = np.max(np.abs(np.gradient(Q, t, axis=0)), axis=0)
         if problem.joint_limits:
             lo, hi = np.array(model.lowerPositionLimit), np.array(model.upperPositionLimit)
@@ -116,11 +117,6 @@ class ArmTask:
                    q_lower=lo, q_upper=hi, v_bound=np.maximum(velocity_factor * vmax, 0.1),
                    tau_max=torque_limit_vector(problem.torque_limits, model),
                    joint_limits=bool(problem.joint_limits))
-
-
-def _training_motion(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
-    from ..min_torque_problem import training_motion
-    return training_motion(problem)
 
 
 def _hermite(q1: np.ndarray, v1: np.ndarray, q2: np.ndarray, v2: np.ndarray, h: np.ndarray | float

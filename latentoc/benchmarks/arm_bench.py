@@ -6,7 +6,7 @@ Run: ``python -m latentoc bench arm [--problem arm-raise] [--tubes 5x] [--ranges
 * first solve: ``python -m latentoc solve`` in a subprocess with a new, empty
   ``$LATENTOC_CACHE`` (so every robot block is generated and compiled), wall time from
   process start to exit (imports, GPDM learning, compilation, Ipopt, the 1 kHz export);
-* warm solves: each NLP (:mod:`latentoc.kinds.min_torque`) built once, then solved ``--repeat``
+* warm solves: each NLP (:mod:`latentoc.min_torque.nlp`) built once, then solved ``--repeat``
   times from the training fit; the median wall and CPU time, Ipopt's iterations, and per
   callback (:attr:`latentoc.nlp.ipopt.IpoptResult.timings`) ms per call x calls, plus what is
   left for Ipopt itself.
@@ -27,15 +27,17 @@ import time
 import numpy as np
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.kinds.min_torque import MinTorqueSettings, ipopt_options, joint_range_nlp, latent_nlp
+from latentoc.min_torque.nlp import ipopt_options, joint_range_nlp, latent_nlp
+from latentoc.min_torque.settings import MinTorqueSettings
+from latentoc.min_torque.training import problem_gpdm, training_frames
+from latentoc.motions import TRAINING_MOTIONS
 from latentoc.nlp import ipopt
 from latentoc.nlp.jit import threads
-from latentoc.min_torque_problem import TRAINING_MOTIONS, problem_gpdm, training_motion
-from latentoc.problem import load_problem
+from latentoc.problem_files import load_problem
 from latentoc.progress import set_quiet
-from latentoc.robots import load_robot
 from latentoc.results import load_result
-from latentoc.solve import resolve_tube
+from latentoc.robots import load_robot
+from latentoc.tube import resolve_tube
 
 TARGET_FIRST_S, TARGET_5X_S = 10.0, 0.3
 CALLBACKS = (("f", "nlp_f"), ("g", "nlp_g"), ("grad_f", "nlp_grad_f"), ("jac_g", "nlp_jac_g"), ("hess", "nlp_hess_l"))
@@ -105,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
     gp, gpdm_time = problem_gpdm(problem)
     sym = SymbolicModel(load_robot(problem.robot))
     settings = MinTorqueSettings.from_problem(problem)
-    t_train, _ = training_motion(problem)
+    t_train, _ = training_frames(problem)
     t_all, Q_all = (np.asarray(a) for a in TRAINING_MOTIONS[problem.training]())
     print(f"warm solves, median of {args.repeat} (GPDM learned in {gpdm_time:.2f} s, {gp.X.shape[0]} frames); "
           f"callbacks: ms per call x calls; rest = solve - callbacks (Ipopt, CasADi)")

@@ -69,7 +69,7 @@ def cold_solve(tube: float) -> dict:
     from latentoc.jump.problem import setup
     from latentoc.jump.solve import solve_jump
     from latentoc.latent.gp_layer import GPLayer
-    from latentoc.problem import load_problem
+    from latentoc.problem_files import load_problem
     from latentoc.jump.problem import settings_from_problem
 
     js = setup(0)
@@ -93,7 +93,7 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     from latentoc.jump.selection import Selection
     from latentoc.jump.start import initial_point
     from latentoc.latent.gp_layer import GPLayer
-    from latentoc.problem import load_problem
+    from latentoc.problem_files import load_problem
 
     js = setup(0)
     s = settings_from_problem(load_problem("broad-jump"), tube)

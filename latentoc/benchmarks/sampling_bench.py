@@ -22,7 +22,7 @@ import platform
 import time
 
 from latentoc.baselines.sampling import SamplingSettings, plan, require_ompl
-from latentoc.problem import load_problem
+from latentoc.problem_files import load_problem
 from latentoc.progress import set_quiet
 
 PAPER_TABLE3 = ((3830, 355.38, -0.96, 5436), (4265, 315.73, 10.30, 8310), (5390, 275.06, 21.86, 15529),
@@ -39,14 +39,14 @@ def _cpu() -> str:
 
 
 def _solves(problem, ranges: list[float]) -> list[dict]:
-    from latentoc.solve import solve
+    from latentoc import solve
     rows = []
     for method, k in [("latent", None)] + [("joint-range", r) for r in ranges]:
         t0 = time.perf_counter()
-        r = solve(problem, method=method, joint_range_deg=k).result
+        r = solve(problem, method=method, joint_range_deg=k)
         rows.append({"method": method, "param": str(problem.tube) if k is None else f"+-{k:g} deg",
-                     "cost": r["cost"], "cost_initial": r["cost_initial"], "solve_s": r["solve_time_s"],
-                     "wall_s": time.perf_counter() - t0, "status": r["status"]})
+                     "cost": r.cost, "cost_initial": r.cost_initial, "solve_s": r.times.solve_s,
+                     "wall_s": time.perf_counter() - t0, "status": r.status})
     return rows
 
 

@@ -29,7 +29,7 @@ from .learning import learn_gpdm
 from .model import GPDM
 from .settings import GPDMSettings
 
-__all__ = ["LEARNER_VERSION", "SHIPPED", "learned_gpdm", "model_path"]
+__all__ = ["LEARNER_VERSION", "SHIPPED", "cached_gpdm", "model_path"]
 
 #: models shipped with the package (module doc)
 SHIPPED = Path(__file__).resolve().parent.parent / "models"
@@ -98,7 +98,7 @@ def _store(model: GPDM, path: Path) -> None:
         tmp.unlink(missing_ok=True)
 
 
-def learned_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) -> GPDM:
+def cached_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) -> GPDM:
     """:func:`learn_gpdm` of ``Y``, read from the cache (or the shipped models) when it was learned
     before; a cached file that fails its checks is learned again with a warning (module doc)."""
     path = model_path(Y, settings)

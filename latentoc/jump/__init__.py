@@ -10,17 +10,7 @@ Modules, one concept each:
 * :mod:`.phases` - stance / flight / landing timing and the node grid;
 * :mod:`.torque_limits` - tau_min, tau_max of Eq. 34 from the training motion;
 * :mod:`.transcription` - the NLP;
-* :mod:`.problem` - settings, solve, registration as the ``"broad-jump"`` solver;
+* :mod:`.problem` - settings, set-up and solve of a problem file;
+* :mod:`.kind` - the ``"broad-jump"`` kind (:data:`latentoc.kinds.KINDS`);
 * :mod:`.verify` - 1 kHz recomputation with numeric Pinocchio.
 """
-
-
-def _register() -> None:
-    """Add the ``"broad-jump"`` solver to :data:`latentoc.solve.SOLVERS`."""
-    from ..solve import SOLVERS
-    from .problem import solve_jump_problem
-
-    SOLVERS["broad-jump"] = solve_jump_problem
-
-
-_register()

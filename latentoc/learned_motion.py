@@ -34,7 +34,7 @@ from .robots import load_robot, load_urdf
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["LearnedMotion", "learn_motion", "learn_file", "figures", "robot_from_argument", "load_learned_gpdm",
+__all__ = ["LearnedMotion", "learn_motion", "learn_file", "figures", "robot_from_argument", "load_gpdm_file",
            "LEARN_NAME"]
 
 LEARN_NAME = "learn.json"
@@ -152,7 +152,7 @@ def learn_file(path: str | Path, robot: str, out: str | Path, *, latent_dim: int
     return learned, write_files(files, out, marker=LEARN_NAME)
 
 
-def load_learned_gpdm(path: str | Path) -> GPDM:
+def load_gpdm_file(path: str | Path) -> GPDM:
     """The GPDM in ``path`` (a ``gpdm.npz`` of ``learn`` or of a result folder); a GPDMInputError
     naming the file if it is missing or not one."""
     path = Path(path)

@@ -4,7 +4,7 @@ Joint positions within [lowerPositionLimit, upperPositionLimit], |joint velocity
 |tau| <= the problem's torque limits: none, one value for every joint, one per joint, or
 ``"urdf"`` (effortLimit). A joint whose model gives no limit (lower >= upper, or a velocity or
 effort limit that is not positive and finite) is unlimited there. The same limits bound the NLP's
-rows (:mod:`latentoc.kinds.min_torque`) and are checked on the exported 1 kHz motion.
+rows (:mod:`.nlp`) and are checked on the exported 1 kHz motion.
 """
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 The objective is J = int_0^T |tau|^2 dt (Eq. 22 with the minimum-torque L of Sect. 4.1) by
 Gauss-Legendre quadrature, J = sum_k w_k |tau_k|^2, where tau_k = RNEA(y, yd, ydd) (Eq. 1-2) of
-the joint motion at node k; or another running cost L of :mod:`latentoc.kinds.objectives`
+the joint motion at node k; or another running cost L of :mod:`.objectives`
 (mechanical energy, acceleration). Two methods give the joint motion along a spline path
 (:mod:`latentoc.spline_path`):
 
@@ -15,7 +15,7 @@ the joint motion at node k; or another running cost L of :mod:`latentoc.kinds.ob
 
 Both hold the joint limits (and, if switched on, the velocity limits) on the constraint grid
 and, if the problem gives torque limits, |tau| <= limit at the quadrature nodes
-(:mod:`latentoc.kinds.limits`); an end-effector goal (:mod:`latentoc.kinds.goal`) frees the
+(:mod:`.limits`); an end-effector goal (:mod:`.goal`) frees the
 end point and holds a frame's position at t = T. Each nonlinear row family is one robot block
 (:mod:`latentoc.nlp.blocks`); with torque limits a single block gives (|tau|^2, tau), feeding
 both the objective and the torque rows, so RNEA runs once per node. The joint-range joint
@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import pinocchio as pin
 import scipy.sparse as sp
 
 from ..dynamics import SymbolicModel
@@ -36,17 +35,14 @@ from ..nlp.assemble import Family, SparseNLP
 from ..nlp.blocks import RobotBlock
 from ..nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
 from ..nlp.inputs import NodeInputs
-from ..problem import Problem
-from ..spline import BSpline
 from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
-from .goal import EndGoal, FreeEndPath, goal_family
-from .limits import Limits, torque_limit_vector
+from .goal import FreeEndPath, goal_family
+from .limits import Limits
 from .objectives import Objective, velocity_block
+from .settings import MinTorqueSettings
 
-__all__ = ["METHODS", "MinTorqueSettings", "MinTorqueNLP", "Samples", "latent_nlp", "joint_range_nlp",
-           "torque_block", "torque_limit_vector", "ipopt_options", "sampled_motion", "violated_times"]
-
-METHODS = ("latent", "joint-range")
+__all__ = ["MinTorqueNLP", "Samples", "latent_nlp", "joint_range_nlp", "torque_block", "ipopt_options",
+           "CONSTRAINT_TOL"]
 
 # The latent rows scaled to a largest gradient of 1 (Ipopt scales only rows above 100 by default):
 # the sigma^2 rows' gradients are ~1e-3. The joint-range NLP keeps Ipopt's default.
@@ -54,54 +50,10 @@ LATENT_ROW_SCALING = {"nlp_scaling_constr_target_gradient": 1.0}
 CONSTRAINT_TOL = 1e-8  # Ipopt's (unscaled) row violation at a solution, also when "acceptable"
 
 
-@dataclass(frozen=True)
-class MinTorqueSettings:
-    """The transcription: spline size and boundary, node densities per knot interval, limits."""
-
-    duration: float
-    control_points: int = 9
-    spline_degree: int = 3
-    boundary: str = "rest"
-    quadrature_points: int = 8
-    constraint_points: int = 24
-    joint_limits: bool = True
-    torque_limits: tuple[float, ...] | str = ()  # or "urdf": the model's effort limits
-    velocity_limits: bool = False
-    objective: Objective = Objective()
-    goal: EndGoal | None = None
-
-    @classmethod
-    def from_problem(cls, problem: Problem, control_points: int | None = None,
-                     duration: float | None = None) -> "MinTorqueSettings":
-        """The settings a :class:`~latentoc.problem.Problem` declares (``control_points`` overrides m,
-        ``duration`` the problem's when it gives none)."""
-        m = problem.control_points if control_points is None else control_points
-        T = problem.duration if problem.duration is not None else duration
-        if T is None:
-            raise ValueError("the problem gives no duration: pass the training motion's")
-        goal = None
-        if problem.settings.get("goal_frame") is not None:
-            goal = EndGoal(problem.goal_frame, tuple(problem.goal_position), problem.goal_tolerance)
-        limits = problem.torque_limits
-        return cls(duration=float(T), control_points=int(m), spline_degree=problem.spline_degree,
-                   boundary=problem.boundary, quadrature_points=problem.quadrature_points,
-                   constraint_points=problem.constraint_points, joint_limits=problem.joint_limits,
-                   torque_limits=limits if isinstance(limits, str) else tuple(limits),
-                   velocity_limits=problem.settings.get("velocity_limits", False),
-                   objective=Objective(problem.settings.get("objective", "torque"),
-                                       problem.settings.get("energy_epsilon", Objective.epsilon)), goal=goal)
-
-    def limits(self, model: pin.Model) -> Limits:
-        """The limits these settings switch on, from ``model``."""
-        return Limits.of(model, self.joint_limits, self.velocity_limits, self.torque_limits)
-
-    def spline(self) -> BSpline:
-        return BSpline(self.control_points, self.duration, self.spline_degree)
-
-
 @dataclass
 class Samples:
-    """Times the exchange adds: to the constraint grid (tube, joint limits) and torque-limit rows."""
+    """Times the exchange (:mod:`.exchange`) adds: to the constraint grid (tube, joint limits) and
+    to the torque-limit rows."""
 
     grid: np.ndarray = field(default_factory=lambda: np.zeros(0))
     torque: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -289,55 +241,3 @@ def ipopt_options(nlp: MinTorqueNLP, *, tol: float, max_iter: int, verbose: bool
     if nlp.method == "latent":
         options.update(LATENT_ROW_SCALING)
     return options
-
-
-def sampled_motion(layer: GPLayer | IdentityLayer, robot: pin.Model, spline: BSpline, P: np.ndarray,
-                   t: np.ndarray, objective: Objective = Objective()) -> dict[str, np.ndarray]:
-    """q, v, a (Eq. 26-28 through ``layer``) along the path P at times t, tau from Pinocchio's
-    numeric RNEA and the objective's L (default |tau|^2): arrays len(t) x nv (L: len(t))."""
-    Z = np.hstack([spline.evaluate(P, t, r) for r in range(3)])
-    m = layer.motion(Z)
-    data = robot.createData()
-    tau = np.array([np.array(pin.rnea(robot, data, q, v, a)) for q, v, a in zip(m.y, m.yd, m.ydd)])
-    q, v, a = np.asarray(m.y), np.asarray(m.yd), np.asarray(m.ydd)
-    return {"q": q, "v": v, "a": a, "tau": tau, "L": objective.integrand(tau, v, a)}
-
-
-TUBE_TOL = 1e-6  # sigma^2 on the 1 kHz grid may exceed delta by this fraction of it
-LIMIT_TOL = 1e-6  # rad and N m a 1 kHz sample may leave the joint and torque limits by
-
-
-def _worst_times(t: np.ndarray, slack: np.ndarray, tol: float) -> np.ndarray:
-    """The worst time of each stretch of t where slack < -tol (local minima of the slack)."""
-    left = np.concatenate([[np.inf], slack[:-1]])
-    right = np.concatenate([slack[1:], [np.inf]])
-    return t[(slack < -tol) & (slack <= left) & (slack <= right)]
-
-
-def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.ndarray | None,
-                   t: np.ndarray) -> tuple[Samples, dict]:
-    """Where the motion sampled at times t (:func:`sampled_motion`) leaves the tube (by more than
-    TUBE_TOL of delta), the joint, velocity or torque limits of ``nlp.limits`` (by more than
-    LIMIT_TOL): each violated stretch's worst time, to add to the NLP (the exchange), and the
-    largest violations."""
-    inside = (t > 0) & (t < t[-1])
-    grid_slack = np.full(len(t), np.inf)
-    worst = {}
-    if sigma2 is not None and nlp.tube is not None:
-        slack = (nlp.tube - sigma2) / nlp.tube
-        worst["tube_rel"] = float(max(0.0, -slack.min()))
-        grid_slack = np.minimum(grid_slack, slack / TUBE_TOL)
-    slacks = nlp.limits.slacks(motion)
-    for key in ("joint_limits_rad", "velocity_limits_rad_s"):  # rows on the constraint grid
-        if key in slacks:
-            worst[key] = float(max(0.0, -slacks[key].min()))
-            grid_slack = np.minimum(grid_slack, slacks[key] / LIMIT_TOL)
-    add = Samples(_worst_times(t[inside], grid_slack[inside], 1.0))
-    if "torque_limits_nm" in slacks:
-        slack = slacks["torque_limits_nm"]
-        worst["torque_limits_nm"] = float(max(0.0, -slack.min()))
-        add.torque = _worst_times(t, slack, LIMIT_TOL)
-    known = nlp.extra.merged(Samples(nlp.grid_t, nlp.quad_t))
-    add = Samples(add.grid[~np.isin(np.round(add.grid, 9), np.round(known.grid, 9))],
-                  add.torque[~np.isin(np.round(add.torque, 9), np.round(known.torque, 9))])
-    return add, worst

@@ -22,10 +22,10 @@ import numpy as np
 from ..dynamics import SymbolicModel
 from ..nlp.blocks import RobotBlock, block_inputs
 
-__all__ = ["OBJECTIVES", "Objective", "velocity_block"]
+__all__ = ["RUNNING_COSTS", "Objective", "velocity_block"]
 
 #: objective name -> what its cost J means (the result's cost_meaning)
-OBJECTIVES = {
+RUNNING_COSTS = {
     "torque": "integral of |tau|^2 dt, N^2 m^2 s (minimised, Eq. 22)",
     "energy": "integral of sqrt((tau . qdot)^2 + eps^2) - eps dt, J: mechanical energy |tau . qdot| made smooth "
               "(minimised)",
@@ -41,15 +41,15 @@ class Objective:
     epsilon: float = 0.1
 
     def __post_init__(self) -> None:
-        if self.name not in OBJECTIVES:
-            raise ValueError(f"unknown objective {self.name!r}; choose one of {', '.join(OBJECTIVES)}")
+        if self.name not in RUNNING_COSTS:
+            raise ValueError(f"unknown objective {self.name!r}; choose one of {', '.join(RUNNING_COSTS)}")
         if not self.epsilon > 0:
             raise ValueError(f"the energy's smoothing epsilon must be positive, got {self.epsilon!r}")
 
     @property
     def meaning(self) -> str:
-        return OBJECTIVES[self.name].replace("eps", f"eps (eps = {self.epsilon:g} W)") if self.name == "energy" \
-            else OBJECTIVES[self.name]
+        return RUNNING_COSTS[self.name].replace("eps", f"eps (eps = {self.epsilon:g} W)") if self.name == "energy" \
+            else RUNNING_COSTS[self.name]
 
     def _L(self, tau, yd, ydd, sqrt, dot, sumsqr):
         if self.name == "torque":

@@ -1,0 +1,315 @@
+"""The commands of ``python -m latentoc`` (:mod:`latentoc.cli` parses the command line and calls one).
+
+Each ``cmd_<name>(args)`` takes the parsed arguments and returns the exit code; an input error is
+a :class:`~latentoc.errors.LatentocError`, which the CLI prints (exit code 2). :func:`summary`
+formats a solved result from its schema alone (:class:`~latentoc.results.Result`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from .errors import LatentocError, SweepError
+from .files import check_out_dir
+from .results import Result
+
+__all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
+           "cmd_show", "cmd_solve", "cmd_sweep", "cmd_start_poses", "cmd_reproduce", "cmd_bench"]
+
+
+def tube_arg(text: str) -> float | str:
+    """A tube given on the command line: a number (delta) or "<k>x" (module :mod:`latentoc.tube`)."""
+    from .tube import parse_tube
+
+    value, relative = parse_tube(text)  # ProblemError (a ValueError) -> argparse message
+    return text if relative else value
+
+
+def overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The problem settings given on the command line (those not None)."""
+    values = {"tube": tube_arg(args.tube) if getattr(args, "tube", None) is not None else None,
+              "latent_dim": getattr(args, "latent_dim", None), "control_points": getattr(args, "control_points", None),
+              "hessian": getattr(args, "hessian", None)}
+    return {k: values[k] for k in names if values[k] is not None}
+
+
+def cmd_learn(args: argparse.Namespace) -> int:
+    from .learned_motion import learn_file
+
+    if args.stride < 1 or args.latent_dim < 1:
+        raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
+    check_out_dir(args.out)
+    learned, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
+                                plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
+                                start=args.start, stop=args.stop, fps=args.fps)
+    s = learned.summary()
+    demo = s["demonstration"]
+    print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
+          f"{len(demo['joints'])} joints" + (f", {len(demo['locked_joints'])} locked" if demo["locked_joints"] else "")
+          + (", resampled" if demo["resampled"] else "") + (f", clipped {demo['clipped']}" if demo["clipped"] else ""))
+    report = s["learning"]
+    ended = "" if report is None else " (converged)" if report["converged"] else f" (not converged: {report['message']})"
+    print(f"  GPDM d = {s['latent_dim']} on {s['learned_frames']} frames in {s['learning_time_s']:.2f} s{ended}")
+    print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
+          f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
+    print("  wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from .plots import plot_solution
+
+    paths = plot_solution(args.result, gif=not args.no_gif, out_dir=args.out, format=args.format)
+    print(f"wrote {len(paths)} figures to {paths[0].parent}: " + ", ".join(p.name for p in paths))
+    return 0
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from .viewer import write_html
+
+    if not args.rate > 0:
+        raise LatentocError(f"--rate must be positive, got {args.rate}")
+    path = write_html(args.result, args.html, rate_hz=args.rate)
+    print(f"wrote {path} (open it in a browser; no server needed)")
+    return 0
+
+
+def cmd_notebooks(args: argparse.Namespace) -> int:
+    import time
+
+    try:
+        from .notebooks import check, notebook_paths, run_notebook
+        import nbclient  # noqa: F401  (the dev extra's, with nbmake)
+    except ImportError:
+        raise LatentocError("running the notebooks needs nbclient: pip install -e '.[dev]'") from None
+
+    for path in notebook_paths(args.names):
+        if args.stale and not check(path):
+            continue
+        t0 = time.perf_counter()
+        meta = run_notebook(path)
+        print(f"ran {path} in {time.perf_counter() - t0:.0f} s ({len(meta['inputs'])} inputs recorded)", flush=True)
+        _warn_uncommitted(meta["inputs"])
+    return 0
+
+
+def _warn_uncommitted(inputs: dict[str, str]) -> None:
+    from .provenance import uncommitted
+
+    dirty = uncommitted(inputs)
+    if dirty:
+        print(f"latentoc: warning: made from uncommitted changes to {', '.join(dirty)}: on a clean clone the "
+              "outputs are stale until those are committed as they are", file=sys.stderr)
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    from .problem import describe_problem
+    from .problem_files import load_problem, problem_names
+    if args.robots:
+        from .robots import robot_names
+        print("\n".join(robot_names()))
+        return 0
+    for name in problem_names():
+        problem = load_problem(name)
+        print(describe_problem(problem) + "\n" if args.verbose else f"{name:24s} {problem.description}")
+    return 0
+
+
+def cmd_show(args: argparse.Namespace) -> int:
+    from .problem import describe_problem
+    from .problem_files import load_problem
+    print(describe_problem(load_problem(args.problem)))
+    return 0
+
+
+def summary(r: Result) -> str:
+    """The lines ``solve`` prints about a :class:`~latentoc.results.Result`."""
+    d = r.details
+    lines = [f"{r.problem} ({r.method}): {r.status} after {r.iterations} iterations",
+             f"  cost {r.cost_initial:.3f} -> {r.cost:.3f}  (gain {r.gain_pct:.2f} %)"]
+    if r.tube is not None:
+        lines.append(f"  tube delta {r.tube.delta:.4g} ({r.tube.spec}; {r.tube.relative:.3g} x noise), "
+                     f"max violation on 1 kHz grid {r.violations['tube']:.3g}")
+    if d.get("joint_range_deg") is not None:
+        lines.append(f"  joint range +-{d['joint_range_deg']:g} deg")
+    if d.get("max_dynamics_residual") is not None:  # contact problems: the exported motion's 1 kHz checks
+        lines.append(f"  1 kHz checks: base residual {d['max_dynamics_residual']:.2g} body weights, min normal force "
+                     f"{d['min_normal_force']:.1f} N, friction ratio {d['max_friction_ratio']:.3f} "
+                     f"(mu {d['friction']:g}), centre-of-pressure margin {d.get('cop_margin_loaded', d['cop_margin']):.3f}"
+                     f" m, ZMP margin {d['zmp_margin']:.3f} m, COM margin {d['com_margin']:.3f} m, "
+                     f"torque-limit excess {d['max_torque_violation']:.2g} N m")
+        if d.get("toe_slip") is not None:
+            lines.append(f"  toe tip: forward travel {d['toe_displacement']:.3f} m; in contact slip "
+                         f"{100 * d['toe_slip']:.2f} cm, height up to {100 * d['max_toe_height']:.2f} cm")
+        if d.get("eq33_feet_distance") is not None:
+            lines.append(f"  Eq. 33 feet distance (both toe tips) {d['eq33_feet_distance']:.3f} m")
+    t = r.times
+    checks = f", 1 kHz checks {t.check_s:.2f} s" if t.check_s else ""
+    total = f"; in all {t.total_s:.2f} s" if t.total_s else ""
+    lines.append(f"  times: gpdm {t.gpdm_s:.2f} s, compile {t.compile_s:.2f} s, build {t.build_s:.2f} s, solve {t.solve_s:.2f} s"
+                 f"{checks}{total}; quadrature error {d.get('quadrature_error', 0.0):.2e}")
+    return "\n".join(lines)
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    from .api import solve
+    from .problem_files import load_problem
+
+    problem = load_problem(args.problem, **overrides(args, "tube", "latent_dim", "control_points", "hessian"))
+    out = check_out_dir(args.out if args.out is not None else Path("out") / f"{problem.name}-{args.method}")
+    gpdm = None
+    if args.gpdm is not None:
+        from .learned_motion import load_gpdm_file
+        gpdm = load_gpdm_file(args.gpdm)
+    r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose, gpdm=gpdm)
+    print(summary(r))
+    if not r.success and not args.keep_failed:
+        print("latentoc: solve did not succeed; nothing written (use --keep-failed to write anyway)", file=sys.stderr)
+        return 1
+    paths = r.save(out)
+    print("  wrote " + ", ".join(str(p) for p in paths))
+    if args.plots:
+        from .plots import plot_solution
+
+        figures = plot_solution(out, gif=True)
+        print(f"  plots: {len(figures)} figures in {out / 'plots'}")
+    return 0 if r.success else 1
+
+
+def _executor(args: argparse.Namespace) -> Any:
+    """A Dask client for --workers / --scheduler, else None (serial)."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    if args.workers is not None and args.scheduler is not None:
+        raise SweepError("give --workers (a local cluster) or --scheduler (an existing one), not both")
+    if args.workers is not None and args.workers < 1:
+        raise SweepError(f"--workers must be a positive number of processes, got {args.workers}")
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise SweepError("--workers and --scheduler need Dask: pip install 'latentoc[distributed]'") from None
+    if args.scheduler is not None:
+        try:
+            return Client(args.scheduler, timeout=10)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise SweepError(f"no Dask scheduler at {args.scheduler}: {exc}") from None
+    return Client(LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None))
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from .problem_files import load_problem
+    from .sweep import format_table, sweep, write_sweep
+
+    problem = load_problem(args.problem, **overrides(args, "latent_dim", "hessian"))
+    if args.tubes == [] or args.ranges == []:
+        raise SweepError(f"--{'tubes' if args.tubes == [] else 'ranges'} needs at least one value (leave it out "
+                         "for the problem's own)")
+    tubes = problem.sweep_tubes if args.tubes is None else [tube_arg(t) for t in args.tubes]
+    ranges: list[float] = []
+    if args.baseline == "joint-range":
+        ranges = problem.sweep_ranges if args.ranges is None else args.ranges
+    out = args.out
+    check_out_dir(out if out is not None else Path("out") / f"{problem.name}-sweep")
+    client = _executor(args)
+    try:
+        outcome = sweep(problem, tubes, client, baseline_ranges=ranges, out=out, resume=args.resume,
+                        warm_start=not args.cold, progress=None if args.quiet else lambda line: print(line, flush=True))
+    finally:
+        if client is not None:
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None and args.workers is not None:
+                cluster.close()
+    print(format_table(outcome.results))
+    if out is not None:
+        meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "workers": args.workers,
+                "scheduler": args.scheduler, "warm_start": client is None and not args.cold}
+        print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))
+    if args.plots and outcome.results:
+        from .plots import plot_gain_vs_tube, save
+
+        folder = out if out is not None else Path("out") / f"{problem.name}-sweep"
+        print("wrote " + str(save(plot_gain_vs_tube(outcome.results, title=f"{problem.name}: gain vs tube"),
+                                  folder / "gain_vs_tube.png")))
+    for f in outcome.failures:
+        print(f"latentoc: task {f.label} failed: {f.error}: {f.message}", file=sys.stderr)
+        if f.traceback and not f.input_error:
+            print(f.traceback, file=sys.stderr)
+    for r in outcome.unsuccessful:
+        what = f"tube {r.tube.spec}" if r.tube is not None else f"joint range {r.details.get('joint_range_deg')}"
+        print(f"latentoc: {what} did not succeed: {r.details.get('rejected') or r.status} (--resume solves it "
+              "again)", file=sys.stderr)
+    return 1 if outcome.failures or outcome.unsuccessful else 0
+
+
+def cmd_start_poses(args: argparse.Namespace) -> int:
+    from .problem_files import load_problem
+    from .results import write_json
+    from .robots import load_robot
+    from .tube import resolve_tube
+    from .start_poses import start_pose_distances
+
+    problem = load_problem(args.problem, **overrides(args, "latent_dim"))
+    if args.out is not None:
+        check_out_dir(args.out)
+    if problem.kind != "latent-min-torque":
+        raise LatentocError(f"start-poses is for latent-min-torque problems (Sect. 4.1.4), {problem.name!r} is "
+                            f"a {problem.kind} problem")
+    from .min_torque.training import problem_gpdm
+
+    gp, _ = problem_gpdm(problem)
+    specs = problem.start_pose_tubes if args.tubes is None else [tube_arg(t) for t in args.tubes]
+    ref = gp.tube_size()
+    deltas = [resolve_tube(s, ref) for s in specs]
+    rows = start_pose_distances(gp, load_robot(problem.robot), problem.start_pose_frame, deltas)
+    print(f"start poses of {problem.name} (relative tubes x tube_training = {ref:.4g}), frame {problem.start_pose_frame}")
+    print("| tube | delta | latent dist | translational dist (m), Eq. 31 | pose dist, Eq. 32 |")
+    print("|---|---|---|---|---|")
+    for s, r in zip(specs, rows):
+        print(f"| {s} | {r['tube']:.4g} | {r['latent_distance']:.4f} | {r['translational_distance']:.4f} "
+              f"| {r['pose_distance']:.4f} |")
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        write_json(args.out / "start_poses.json", {"problem": problem.name, "tube_training": ref,
+                                                    "specs": [str(s) for s in specs], "rows": rows})
+        print(f"wrote {args.out / 'start_poses.json'}")
+    return 0
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from .reproduce import report, reproduce
+    from .results import atomic_write
+
+    if args.figures:
+        from .readme_figures import make_figures
+
+        import json
+
+        written = make_figures()
+        print("wrote " + ", ".join(str(p) for p in written))
+        _warn_uncommitted(json.loads(written[-1].read_text())["inputs"])
+        return 0
+
+    if args.out.is_dir():
+        raise LatentocError(f"--out {args.out} is a folder; reproduce writes a Markdown file")
+    check_out_dir(args.out.parent, "--out's folder")
+    text = report(reproduce(quick=args.quick, budgets=args.budgets))
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(args.out, lambda f: f.write(text))
+    print(f"wrote {args.out}")
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .benchmarks import arm_bench, blocks_bench, dynamics_bench, gpdm_bench, jump_bench, sampling_bench
+
+    benchmarks = {"arm": arm_bench.main, "blocks": blocks_bench.main, "dynamics": dynamics_bench.main,
+                  "gpdm": gpdm_bench.main, "jump": jump_bench.main, "sampling": sampling_bench.main}
+    name = args.name.replace("-", "_")
+    if name not in benchmarks:
+        raise LatentocError(f"unknown benchmark {args.name!r}; known: {', '.join(benchmarks)}")
+    return int(benchmarks[name](args.rest) or 0)

@@ -1,0 +1,78 @@
+"""What a problem kind provides (:class:`Kind`) and what its solve returns (:class:`Solution`).
+
+A kind is one object, registered once in :data:`latentoc.kinds.KINDS` (docs/kinds.md)::
+
+    Kind(schema=SCHEMA,                  # its problem files' keys, defaults, docs and checks
+         tube_reference=tube_reference,  # what a relative tube "<k>x" multiplies (tube_training)
+         solve=solve_my_kind,            # problem -> Solution (the signature of :class:`Solver`)
+         methods=("latent",))            # the solve methods it offers
+
+The solve reads every setting from the :class:`~latentoc.problem.Problem` (already checked
+against the schema), raises :class:`~latentoc.errors.SolveError` for what only solving can find
+wrong (an infeasible tube, an unknown method) BEFORE any work is written, and returns a
+:class:`Solution`: a JSON-ready ``result`` dict (at least problem, kind, method, status, success,
+iterations, cost_initial, cost, performance_gain_pct, cost_meaning, solve_time_s and violations;
+for a latent solve the tube's tube_spec, tube, tube_relative, tube_training, max_sigma2,
+:mod:`latentoc.tube`), the ``trajectory`` arrays (keys from
+:data:`latentoc.results.TRAJECTORY_KEYS`), the GPDM it used and what a neighbouring tube may
+start from (``warm``, with its ``tube``). The result's keys beyond the core ones are the kind's
+result details (:attr:`latentoc.results.Result.details`). :meth:`latentoc.results.Result.from_solution`
+turns a Solution into the versioned result schema; the public ``latentoc.solve`` returns that.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from .gpdm import GPDM
+from .problem import Problem
+from .schema import Schema
+
+__all__ = ["Kind", "Solution", "Solver", "TubeReference"]
+
+
+@dataclass
+class Solution:
+    """What a kind's solve returns: ``result`` (JSON-ready dict), ``trajectory`` (numpy arrays),
+    the ``gpdm`` it solved in, and ``warm``, what a neighbouring solve of the same problem may
+    start from (a kind's own data, with the ``tube`` it was solved at)."""
+
+    result: dict[str, Any]
+    trajectory: dict[str, Any] = field(default_factory=dict)
+    warm: dict[str, Any] | None = None
+    gpdm: GPDM | None = None
+
+    @property
+    def success(self) -> bool:
+        return bool(self.result.get("success", False))
+
+
+class Solver(Protocol):
+    """A kind's solve: ``warm_start`` is the Solution of the same problem at a smaller tube (each
+    kind takes what it needs from its ``warm``), ``gpdm`` a learned GPDM to use instead of the
+    problem's, ``verbose`` Ipopt's own log."""
+
+    def __call__(self, problem: Problem, *, method: str, joint_range_deg: float | None, gpdm: GPDM | None,
+                 verbose: bool, warm_start: Solution | None) -> Solution: ...
+
+
+class TubeReference(Protocol):
+    """What a relative tube ``"<k>x"`` of ``problem`` multiplies: tube_training of its GPDM (Eq. 30),
+    learned if needed."""
+
+    def __call__(self, problem: Problem) -> float: ...
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One problem kind (module doc)."""
+
+    schema: Schema
+    tube_reference: TubeReference
+    solve: Solver
+    methods: tuple[str, ...] = ("latent",)
+
+    @property
+    def name(self) -> str:
+        """The kind's name, its problem files' ``kind``."""
+        return self.schema.kind

@@ -1,0 +1,97 @@
+"""The exchange of a minimum-torque solve: constraint points added until the 1 kHz grid holds.
+
+The NLP holds the tube and the joint and velocity limits on its constraint grid and the torque
+limits at its quadrature nodes. After a successful Ipopt run the motion is sampled on the 1 kHz
+grid (:func:`.export.sampled_motion`); the worst time of every stretch where it leaves the tube
+(by more than :data:`TUBE_TOL` of delta) or a limit (by more than :data:`LIMIT_TOL`) joins the
+NLP's nodes (:class:`.nlp.Samples`) and Ipopt resumes from the point, for at most
+:data:`EXCHANGE_ROUNDS` runs.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..latent import GPLayer
+from ..nlp import ipopt
+from ..nlp.ipopt import IpoptResult
+from ..problem import Problem
+from ..results import convergence_entry
+from .export import Solved, sampled_motion
+from .nlp import MinTorqueNLP, Samples, ipopt_options
+
+__all__ = ["TUBE_TOL", "LIMIT_TOL", "EXCHANGE_ROUNDS", "violated_times", "solve_exchanged"]
+
+TUBE_TOL = 1e-6  # sigma^2 on the 1 kHz grid may exceed delta by this fraction of it
+LIMIT_TOL = 1e-6  # rad and N m a 1 kHz sample may leave the joint and torque limits by
+EXCHANGE_ROUNDS = 8  # Ipopt runs at the most
+
+
+def _worst_times(t: np.ndarray, slack: np.ndarray, tol: float) -> np.ndarray:
+    """The worst time of each stretch of t where slack < -tol (local minima of the slack)."""
+    left = np.concatenate([[np.inf], slack[:-1]])
+    right = np.concatenate([slack[1:], [np.inf]])
+    return t[(slack < -tol) & (slack <= left) & (slack <= right)]
+
+
+def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.ndarray | None,
+                   t: np.ndarray) -> tuple[Samples, dict[str, float]]:
+    """Where the motion sampled at times t (:func:`.export.sampled_motion`) leaves the tube (by more
+    than TUBE_TOL of delta), the joint, velocity or torque limits of ``nlp.limits`` (by more than
+    LIMIT_TOL): each violated stretch's worst time, to add to the NLP, and the largest violations."""
+    inside = (t > 0) & (t < t[-1])
+    grid_slack = np.full(len(t), np.inf)
+    worst = {}
+    if sigma2 is not None and nlp.tube is not None:
+        slack = (nlp.tube - sigma2) / nlp.tube
+        worst["tube_rel"] = float(max(0.0, -slack.min()))
+        grid_slack = np.minimum(grid_slack, slack / TUBE_TOL)
+    slacks = nlp.limits.slacks(motion)
+    for key in ("joint_limits_rad", "velocity_limits_rad_s"):  # rows on the constraint grid
+        if key in slacks:
+            worst[key] = float(max(0.0, -slacks[key].min()))
+            grid_slack = np.minimum(grid_slack, slacks[key] / LIMIT_TOL)
+    add = Samples(_worst_times(t[inside], grid_slack[inside], 1.0))
+    if "torque_limits_nm" in slacks:
+        slack = slacks["torque_limits_nm"]
+        worst["torque_limits_nm"] = float(max(0.0, -slack.min()))
+        add.torque = _worst_times(t, slack, LIMIT_TOL)
+    known = nlp.extra.merged(Samples(nlp.grid_t, nlp.quad_t))
+    add = Samples(add.grid[~np.isin(np.round(add.grid, 9), np.round(known.grid, 9))],
+                  add.torque[~np.isin(np.round(add.torque, 9), np.round(known.torque, 9))])
+    return add, worst
+
+
+def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, x0: np.ndarray, verbose: bool) -> IpoptResult:
+    options = ipopt_options(nlp, tol=problem.tol, max_iter=problem.max_iter, verbose=verbose)
+    return ipopt.solve(nlp.nlp, x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, options, hessian=problem.hessian,
+                       desc=f"{problem.name} ({nlp.method})")
+
+
+def solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild: Callable[[Samples], MinTorqueNLP], x0: np.ndarray,
+                    robot: pin.Model, t: np.ndarray, verbose: bool) -> Solved:
+    """Solve ``nlp`` from ``x0`` with the problem's Ipopt settings, check the tube and the limits on
+    the 1 kHz grid t, add the violated times (``rebuild(extra)`` is the NLP with them) and resume
+    from the point, until the grid holds (module doc)."""
+    solved = Solved(nlp, _run_ipopt(problem, nlp, x0, verbose))
+    while True:
+        nlp, run = solved.nlp, solved.run
+        entry: dict[str, Any] = {"iterations": run.iterations, "time_s": run.time_s, "status": run.status,
+                                 "grid_points": int(len(nlp.grid_t)),
+                                 "torque_points": int(len(nlp.quad_t) + len(nlp.extra.torque))}
+        solved.rounds.append(entry)
+        solved.convergence.append(convergence_entry(nlp.method, len(solved.rounds), run.history))
+        if not run.success or len(solved.rounds) >= EXCHANGE_ROUNDS:
+            return solved
+        P = nlp.control_points(run.x)
+        motion = sampled_motion(nlp.layer, robot, nlp.path.spline, P, t, nlp.objective)
+        sigma2 = nlp.layer.variance(nlp.path.spline.evaluate(P, t))[0] \
+            if isinstance(nlp.layer, GPLayer) and nlp.tube is not None else None
+        add, entry["violation_1khz"] = violated_times(nlp, motion, sigma2, t)
+        if not add:
+            return solved
+        solved.nlp = rebuild(nlp.extra.merged(add))
+        solved.run = _run_ipopt(problem, solved.nlp, run.x, verbose)

@@ -1,0 +1,13 @@
+"""The ``"latent-min-torque"`` problem kind (:class:`~latentoc.kind.Kind`): any fixed-base robot's
+minimum-torque motion (Sect. 4.1), in the latent space or, as the baseline, in joint space."""
+from __future__ import annotations
+
+from ..kind import Kind
+from .problem import SCHEMA
+from .solve import METHODS, solve_latent_min_torque
+from .training import tube_reference
+
+__all__ = ["MIN_TORQUE"]
+
+#: the minimum-torque kind: methods "latent" and "joint-range"
+MIN_TORQUE = Kind(schema=SCHEMA, tube_reference=tube_reference, solve=solve_latent_min_torque, methods=METHODS)
