@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 from PIL import Image
 
-from latentoc import animation
+from latentoc.plots import animation
 from latentoc.robots.human_arm import arm_trial, build_human_arm
 from latentoc.plots import DPI
 

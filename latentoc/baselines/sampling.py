@@ -274,11 +274,11 @@ class KinodynamicRRTStar:
             bounds.setHigh(i, float(highs[i]))
         space.setBounds(bounds)
 
-        class Validator(ob.MotionValidator):
+        class Validator(ob.MotionValidator):  # type: ignore[name-defined]  # OMPL ships no stubs
             def checkMotion(self, s1: Any, s2: Any) -> bool:
                 return edges.feasible(np.array(s1[0:dim]), np.array(s2[0:dim]))
 
-        class TorqueCost(ob.OptimizationObjective):
+        class TorqueCost(ob.OptimizationObjective):  # type: ignore[name-defined]  # OMPL ships no stubs
             def stateCost(self, s: Any) -> Any:
                 return ob.Cost(0.0)
 
@@ -309,7 +309,8 @@ class KinodynamicRRTStar:
         planner.setup()
         self._ob, self._si, self._pdef, self._planner = ob, si, pdef, planner
         self._states = (start, goal)
-        self.time_s, self.improvements = 0.0, []
+        self.time_s = 0.0
+        self.improvements: list[tuple[float, int, float]] = []  # (s, iteration, J) of each better plan
 
     def close(self) -> None:
         """Restore OMPL's log level."""
@@ -373,6 +374,6 @@ def plan(problem: Problem, seconds: list[float] | None = None, iterations: list[
     try:
         if seconds is not None:
             return [planner.run(seconds=float(s)) for s in sorted(seconds)]
-        return [planner.run(iterations=int(k)) for k in sorted(iterations)]
+        return [planner.run(iterations=int(k)) for k in sorted(iterations or [])]
     finally:
         planner.close()

@@ -162,7 +162,9 @@ def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, se
     limits = settings.limits(model.model)
     Kg = len(grid_t)
     families, lbg, ubg = [], [], []
-    if tube is not None:  # sigma^2(x(t_j)) / delta <= 1 (Eq. 29), relative so that Ipopt's tolerances are
+    if tube is not None:  # sigma^2(x(t_j)) / delta <= 1 (Eq. 29), relative: Ipopt's tolerances in units of delta
+        if not isinstance(layer, GPLayer):
+            raise TypeError("a tube needs the GP layer: sigma^2 is the GPDM's")
         S, s0 = _spline_inputs(path, grid_t, 1)
         families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(Kg, format="csr") / tube))
         lbg.append(np.full(Kg, -np.inf))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -100,221 +101,246 @@ def _lines(text: str) -> list[tuple[int, list[str]]]:
     return out
 
 
-def parse_asf(text: str, path: str | Path | None = None) -> Skeleton:
-    """Parse ASF text; raise :class:`MocapFormatError` naming ``path`` and line."""
-    p = None if path is None else str(path)
-    lines = _lines(text)
-    name, version = "", ""
-    mass_u, length_u, angle_u = 1.0, 1.0, "deg"
-    root = Root()
-    bones: dict[str, Bone] = {}
-    bone_line: dict[str, int] = {}
-    hierarchy: dict[str, list[str]] = {}
-    parent_of: dict[str, str] = {}
-    section = None
-    seen_root = seen_bones = seen_hier = False
-    cur: dict | None = None
-    in_limits = False
-    in_hier_block = False
-    last_line = 0
+class _Parser:
+    """The state of one :func:`parse_asf` pass: the current section, the open bone and what is read."""
 
-    def finish_bone(ln: int) -> None:
-        nonlocal cur
+    def __init__(self, path: str | None) -> None:
+        self.p = path
+        self.name, self.version = "", ""
+        self.mass_u, self.length_u, self.angle_u = 1.0, 1.0, "deg"
+        self.root = Root()
+        self.bones: dict[str, Bone] = {}
+        self.bone_line: dict[str, int] = {}
+        self.hierarchy: dict[str, list[str]] = {}
+        self.parent_of: dict[str, str] = {}
+        self.section: str | None = None
+        self.seen: set[str] = set()  # the sections that must appear: :root, :bonedata, :hierarchy
+        self.cur: dict[str, Any] | None = None  # the bone between begin and end
+        self.in_limits = False  # a "(lo hi)" line continues the limits
+        self.in_hier_block = False
+
+    def error(self, line: int | None, message: str) -> MocapFormatError:
+        return MocapFormatError(self.p, line, message)
+
+    def line(self, ln: int, toks: list[str]) -> None:
+        """Read one line (its tokens) in the current section."""
+        key = toks[0]
+        if key.startswith(":"):
+            self.section_header(ln, toks)
+        elif self.section is None:
+            raise self.error(ln, "text before the first section")
+        elif self.section == ":units":
+            self.units(ln, toks)
+        elif self.section == ":root":
+            self.root_line(ln, toks)
+        elif self.section == ":bonedata":
+            self.bone_data(ln, toks)
+        elif self.section == ":hierarchy":
+            self.hierarchy_line(ln, toks)
+
+    def section_header(self, ln: int, toks: list[str]) -> None:
+        key = toks[0]
+        if self.cur is not None:
+            raise self.error(ln, "section starts inside an unfinished bone")
+        self.in_limits = False
+        self.section = key
+        if key == ":version":
+            self.version = " ".join(toks[1:])
+        elif key == ":name":
+            self.name = " ".join(toks[1:])
+        elif key in (":root", ":bonedata", ":hierarchy"):
+            self.seen.add(key)
+        elif key not in (":units", ":documentation"):
+            raise self.error(ln, f"unknown section {key!r}")
+        if len(toks) > 1 and key not in (":version", ":name"):
+            raise self.error(ln, f"unexpected text after {key}")
+
+    def units(self, ln: int, toks: list[str]) -> None:
+        key = toks[0]
+        if len(toks) != 2:
+            raise self.error(ln, "units line needs a name and a value")
+        if key == "mass":
+            self.mass_u = parse_number(toks[1], self.p, ln)
+        elif key == "length":
+            self.length_u = parse_number(toks[1], self.p, ln)
+            if self.length_u <= 0:
+                raise self.error(ln, "length unit must be positive")
+        elif key == "angle":
+            if toks[1] not in ("deg", "rad"):
+                raise self.error(ln, f"unknown angle unit {toks[1]!r}")
+            self.angle_u = toks[1]
+        else:
+            raise self.error(ln, f"unknown unit {key!r}")
+
+    def root_line(self, ln: int, toks: list[str]) -> None:
+        key, p = toks[0], self.p
+        if key == "order":
+            order = [t.upper() for t in toks[1:]]
+            if sorted(order) != sorted(ROOT_ORDER_NAMES):
+                raise self.error(ln, f"root order must be a permutation of {ROOT_ORDER_NAMES}")
+            self.root.order = order
+        elif key == "axis":
+            if len(toks) != 2 or not _AXIS_ORDER.match(toks[1].upper()) or len(set(toks[1].upper())) != 3:
+                raise self.error(ln, "root axis must be a rotation order such as XYZ")
+            self.root.axis = toks[1].upper()
+        elif key == "position":
+            self.root.position = _nums(toks[1:], 3, p, ln, "root position")
+        elif key == "orientation":
+            self.root.orientation = _nums(toks[1:], 3, p, ln, "root orientation")
+        else:
+            raise self.error(ln, f"unknown root keyword {key!r}")
+
+    def bone_data(self, ln: int, toks: list[str]) -> None:
+        key = toks[0]
+        if key == "begin":
+            if self.cur is not None or len(toks) != 1:
+                raise self.error(ln, "unexpected 'begin'")
+            self.cur, self.in_limits = {}, False
+        elif self.cur is None:
+            raise self.error(ln, f"{key!r} outside a bone begin/end block")
+        elif key == "end":
+            if len(toks) != 1:
+                raise self.error(ln, "unexpected text after 'end'")
+            self.finish_bone(ln)
+            self.in_limits = False
+        elif key == "limits" or (key.startswith("(") and self.in_limits):
+            self.limit(ln, toks, self.cur)
+            self.in_limits = True
+        else:
+            self.bone_keyword(ln, toks, self.cur)
+            self.in_limits = False
+
+    def bone_keyword(self, ln: int, toks: list[str], cur: dict[str, Any]) -> None:
+        """One of a bone's id, name, direction, length, axis and dof lines."""
+        key, p = toks[0], self.p
+        if key == "id":
+            v = _nums(toks[1:], 1, p, ln, "id")[0]
+            if v != int(v):
+                raise self.error(ln, "bone id must be an integer")
+            cur["id"] = int(v)
+        elif key == "name":
+            if len(toks) != 2:
+                raise self.error(ln, "name needs one word")
+            cur["name"], cur["name_line"] = toks[1], ln
+        elif key == "direction":
+            cur["direction"], cur["dir_line"] = _nums(toks[1:], 3, p, ln, "direction"), ln
+        elif key == "length":
+            cur["length"] = float(_nums(toks[1:], 1, p, ln, "length")[0])
+            if cur["length"] < 0:
+                raise self.error(ln, "negative bone length")
+        elif key == "axis":
+            if len(toks) != 5:
+                raise self.error(ln, "axis needs 3 angles and an order")
+            order = toks[4].upper()
+            if not _AXIS_ORDER.match(order) or len(set(order)) != 3:
+                raise self.error(ln, f"bad axis order {toks[4]!r}")
+            cur["axis"], cur["axis_order"] = _nums(toks[1:4], 3, p, ln, "axis"), order
+        elif key == "dof":
+            cur["dof"] = self.dof(ln, toks)
+        else:
+            raise self.error(ln, f"unknown bone keyword {key!r}")
+
+    def dof(self, ln: int, toks: list[str]) -> list[str]:
+        dof = [t.lower() for t in toks[1:]]
+        if not dof:
+            raise self.error(ln, "empty dof line")
+        for d in dof:
+            if d not in ("rx", "ry", "rz"):
+                raise self.error(ln, f"unknown or unsupported dof name {d!r}")
+        if len(set(dof)) != len(dof):
+            raise self.error(ln, "repeated dof name")
+        return dof
+
+    def limit(self, ln: int, toks: list[str], cur: dict[str, Any]) -> None:
+        """A "limits (lo hi)" line or a "(lo hi)" line after it."""
+        rest = " ".join(toks[1:] if toks[0] == "limits" else toks)
+        m = re.fullmatch(r"\(\s*(\S+)\s+(\S+)\s*\)", rest)
+        if m is None:
+            raise self.error(ln, "limits must look like (lo hi)")
+        lo, hi = parse_number(m.group(1), self.p, ln), parse_number(m.group(2), self.p, ln)
+        if lo > hi:
+            raise self.error(ln, "lower limit above upper limit")
+        if "dof" not in cur:
+            raise self.error(ln, "limits before dof")
+        cur.setdefault("limits", []).append((lo, hi))
+        if len(cur["limits"]) > len(cur["dof"]):
+            raise self.error(ln, "more limits than dof")
+
+    def finish_bone(self, ln: int) -> None:
+        cur = self.cur
         assert cur is not None
         for key in ("id", "name", "direction", "length", "axis"):
             if key not in cur:
-                raise MocapFormatError(p, ln, f"bone ending here lacks '{key}'")
+                raise self.error(ln, f"bone ending here lacks '{key}'")
         dof = cur.get("dof", [])
         limits = cur.get("limits", [])
         if limits and len(limits) != len(dof):
-            raise MocapFormatError(p, ln, f"bone {cur['name']!r} has {len(dof)} dof but {len(limits)} limits")
+            raise self.error(ln, f"bone {cur['name']!r} has {len(dof)} dof but {len(limits)} limits")
         nm = cur["name"]
-        if nm in bones or nm == "root":
-            raise MocapFormatError(p, cur["name_line"], f"duplicate bone name {nm!r}")
+        if nm in self.bones or nm == "root":
+            raise self.error(cur["name_line"], f"duplicate bone name {nm!r}")
         d = cur["direction"]
         nrm = float(np.linalg.norm(d))
         if nrm < 1e-12:
-            raise MocapFormatError(p, cur["dir_line"], "zero bone direction")
-        bones[nm] = Bone(id=int(cur["id"]), name=nm, direction=d / nrm, length=cur["length"],
-                         axis=cur["axis"], axis_order=cur["axis_order"], dof=list(dof),
-                         limits=list(limits))
-        bone_line[nm] = cur["name_line"]
-        cur = None
+            raise self.error(cur["dir_line"], "zero bone direction")
+        self.bones[nm] = Bone(id=int(cur["id"]), name=nm, direction=d / nrm, length=cur["length"],
+                              axis=cur["axis"], axis_order=cur["axis_order"], dof=list(dof), limits=list(limits))
+        self.bone_line[nm] = cur["name_line"]
+        self.cur = None
 
-    for ln, toks in lines:
-        last_line = ln
+    def hierarchy_line(self, ln: int, toks: list[str]) -> None:
         key = toks[0]
-        if key.startswith(":"):
-            if cur is not None:
-                raise MocapFormatError(p, ln, "section starts inside an unfinished bone")
-            in_limits = False
-            section = key
-            if key == ":version":
-                version = " ".join(toks[1:])
-            elif key == ":name":
-                name = " ".join(toks[1:])
-            elif key == ":root":
-                seen_root = True
-            elif key == ":bonedata":
-                seen_bones = True
-            elif key == ":hierarchy":
-                seen_hier = True
-            elif key in (":units", ":documentation"):
-                pass
-            else:
-                raise MocapFormatError(p, ln, f"unknown section {key!r}")
-            if len(toks) > 1 and key not in (":version", ":name"):
-                raise MocapFormatError(p, ln, f"unexpected text after {key}")
-            continue
-        if section is None:
-            raise MocapFormatError(p, ln, "text before the first section")
-        if section in (":version", ":name", ":documentation"):
-            continue
-        if section == ":units":
-            if len(toks) != 2:
-                raise MocapFormatError(p, ln, "units line needs a name and a value")
-            if key == "mass":
-                mass_u = parse_number(toks[1], p, ln)
-            elif key == "length":
-                length_u = parse_number(toks[1], p, ln)
-                if length_u <= 0:
-                    raise MocapFormatError(p, ln, "length unit must be positive")
-            elif key == "angle":
-                if toks[1] not in ("deg", "rad"):
-                    raise MocapFormatError(p, ln, f"unknown angle unit {toks[1]!r}")
-                angle_u = toks[1]
-            else:
-                raise MocapFormatError(p, ln, f"unknown unit {key!r}")
-            continue
-        if section == ":root":
-            if key == "order":
-                order = [t.upper() for t in toks[1:]]
-                if sorted(order) != sorted(ROOT_ORDER_NAMES):
-                    raise MocapFormatError(p, ln, f"root order must be a permutation of {ROOT_ORDER_NAMES}")
-                root.order = order
-            elif key == "axis":
-                if len(toks) != 2 or not _AXIS_ORDER.match(toks[1].upper()) or len(set(toks[1].upper())) != 3:
-                    raise MocapFormatError(p, ln, "root axis must be a rotation order such as XYZ")
-                root.axis = toks[1].upper()
-            elif key == "position":
-                root.position = _nums(toks[1:], 3, p, ln, "root position")
-            elif key == "orientation":
-                root.orientation = _nums(toks[1:], 3, p, ln, "root orientation")
-            else:
-                raise MocapFormatError(p, ln, f"unknown root keyword {key!r}")
-            continue
-        if section == ":bonedata":
-            if key == "begin":
-                if cur is not None or len(toks) != 1:
-                    raise MocapFormatError(p, ln, "unexpected 'begin'")
-                cur = {}
-                in_limits = False
-                continue
-            if cur is None:
-                raise MocapFormatError(p, ln, f"{key!r} outside a bone begin/end block")
-            if key == "end":
-                if len(toks) != 1:
-                    raise MocapFormatError(p, ln, "unexpected text after 'end'")
-                finish_bone(ln)
-                in_limits = False
-                continue
-            if key == "id":
-                v = _nums(toks[1:], 1, p, ln, "id")[0]
-                if v != int(v):
-                    raise MocapFormatError(p, ln, "bone id must be an integer")
-                cur["id"] = int(v)
-            elif key == "name":
-                if len(toks) != 2:
-                    raise MocapFormatError(p, ln, "name needs one word")
-                cur["name"], cur["name_line"] = toks[1], ln
-            elif key == "direction":
-                cur["direction"] = _nums(toks[1:], 3, p, ln, "direction")
-                cur["dir_line"] = ln
-            elif key == "length":
-                cur["length"] = float(_nums(toks[1:], 1, p, ln, "length")[0])
-                if cur["length"] < 0:
-                    raise MocapFormatError(p, ln, "negative bone length")
-            elif key == "axis":
-                if len(toks) != 5:
-                    raise MocapFormatError(p, ln, "axis needs 3 angles and an order")
-                order = toks[4].upper()
-                if not _AXIS_ORDER.match(order) or len(set(order)) != 3:
-                    raise MocapFormatError(p, ln, f"bad axis order {toks[4]!r}")
-                cur["axis"] = _nums(toks[1:4], 3, p, ln, "axis")
-                cur["axis_order"] = order
-            elif key == "dof":
-                dof = [t.lower() for t in toks[1:]]
-                if not dof:
-                    raise MocapFormatError(p, ln, "empty dof line")
-                for d in dof:
-                    if d not in ("rx", "ry", "rz"):
-                        raise MocapFormatError(p, ln, f"unknown or unsupported dof name {d!r}")
-                if len(set(dof)) != len(dof):
-                    raise MocapFormatError(p, ln, "repeated dof name")
-                cur["dof"] = dof
-            elif key == "limits" or (key.startswith("(") and in_limits):
-                rest = " ".join(toks[1:] if key == "limits" else toks)
-                m = re.fullmatch(r"\(\s*(\S+)\s+(\S+)\s*\)", rest)
-                if m is None:
-                    raise MocapFormatError(p, ln, "limits must look like (lo hi)")
-                lo, hi = parse_number(m.group(1), p, ln), parse_number(m.group(2), p, ln)
-                if lo > hi:
-                    raise MocapFormatError(p, ln, "lower limit above upper limit")
-                if "dof" not in cur:
-                    raise MocapFormatError(p, ln, "limits before dof")
-                cur.setdefault("limits", []).append((lo, hi))
-                if len(cur["limits"]) > len(cur["dof"]):
-                    raise MocapFormatError(p, ln, "more limits than dof")
-                in_limits = True
-                continue
-            else:
-                raise MocapFormatError(p, ln, f"unknown bone keyword {key!r}")
-            in_limits = False
-            continue
-        if section == ":hierarchy":
-            if key == "begin" and len(toks) == 1:
-                in_hier_block = True
-                continue
-            if key == "end" and len(toks) == 1:
-                in_hier_block = False
-                continue
-            if not in_hier_block:
-                raise MocapFormatError(p, ln, "hierarchy line outside begin/end")
-            par = key
-            if par != "root" and par not in bones:
-                raise MocapFormatError(p, ln, f"hierarchy names unknown bone {par!r}")
-            if len(toks) < 2:
-                raise MocapFormatError(p, ln, "hierarchy line without children")
-            for ch in toks[1:]:
-                if ch not in bones:
-                    raise MocapFormatError(p, ln, f"hierarchy names unknown bone {ch!r}")
-                if ch in parent_of:
-                    raise MocapFormatError(p, ln, f"bone {ch!r} has two parents")
-                parent_of[ch] = par
-                hierarchy.setdefault(par, []).append(ch)
-            continue
-    if cur is not None:
-        raise MocapFormatError(p, last_line, "file ends inside a bone block")
-    if not (seen_root and seen_bones and seen_hier):
-        raise MocapFormatError(p, last_line or None, "missing :root, :bonedata or :hierarchy section")
-    for nm in bones:
-        if nm not in parent_of:
-            raise MocapFormatError(p, bone_line[nm], f"bone {nm!r} is not in the hierarchy")
-    # reachability from root (no cycles)
-    seen: set[str] = set()
-    stack = list(hierarchy.get("root", []))
-    while stack:
-        b = stack.pop()
-        seen.add(b)
-        stack.extend(hierarchy.get(b, []))
-    for nm in bones:
-        if nm not in seen:
-            raise MocapFormatError(p, bone_line[nm], f"bone {nm!r} is not connected to the root")
-    for nm, b in bones.items():
-        b.parent = parent_of[nm]
-        b.children = list(hierarchy.get(nm, []))
-    return Skeleton(name=name, version=version, mass_unit=mass_u, length_unit=length_u,
-                    angle_unit=angle_u, root=root, bones=bones, hierarchy=hierarchy, path=p)
+        if key in ("begin", "end") and len(toks) == 1:
+            self.in_hier_block = key == "begin"
+            return
+        if not self.in_hier_block:
+            raise self.error(ln, "hierarchy line outside begin/end")
+        if key != "root" and key not in self.bones:
+            raise self.error(ln, f"hierarchy names unknown bone {key!r}")
+        if len(toks) < 2:
+            raise self.error(ln, "hierarchy line without children")
+        for ch in toks[1:]:
+            if ch not in self.bones:
+                raise self.error(ln, f"hierarchy names unknown bone {ch!r}")
+            if ch in self.parent_of:
+                raise self.error(ln, f"bone {ch!r} has two parents")
+            self.parent_of[ch] = key
+            self.hierarchy.setdefault(key, []).append(ch)
+
+    def skeleton(self, last_line: int) -> Skeleton:
+        """The skeleton read, its tree checked: every bone in the hierarchy and reached from the root."""
+        if self.cur is not None:
+            raise self.error(last_line, "file ends inside a bone block")
+        if len(self.seen) != 3:
+            raise self.error(last_line or None, "missing :root, :bonedata or :hierarchy section")
+        for nm in self.bones:
+            if nm not in self.parent_of:
+                raise self.error(self.bone_line[nm], f"bone {nm!r} is not in the hierarchy")
+        reached: set[str] = set()  # reachability from root (no cycles)
+        stack = list(self.hierarchy.get("root", []))
+        while stack:
+            b = stack.pop()
+            reached.add(b)
+            stack.extend(self.hierarchy.get(b, []))
+        for nm in self.bones:
+            if nm not in reached:
+                raise self.error(self.bone_line[nm], f"bone {nm!r} is not connected to the root")
+        for nm, bone in self.bones.items():
+            bone.parent = self.parent_of[nm]
+            bone.children = list(self.hierarchy.get(nm, []))
+        return Skeleton(name=self.name, version=self.version, mass_unit=self.mass_u, length_unit=self.length_u,
+                        angle_unit=self.angle_u, root=self.root, bones=self.bones, hierarchy=self.hierarchy,
+                        path=self.p)
+
+
+def parse_asf(text: str, path: str | Path | None = None) -> Skeleton:
+    """Parse ASF text; raise :class:`MocapFormatError` naming ``path`` and line."""
+    parser = _Parser(None if path is None else str(path))
+    last_line = 0
+    for ln, toks in _lines(text):
+        last_line = ln
+        parser.line(ln, toks)
+    return parser.skeleton(last_line)
 
 
 def read_asf(path: str | Path) -> Skeleton:

@@ -72,6 +72,44 @@ def dof_matrix(dofs: list[str], values_rad: np.ndarray) -> np.ndarray:
 _JOINTS = {"x": pin.JointModelRX, "y": pin.JointModelRY, "z": pin.JointModelRZ}
 
 
+def _add_base(model: pin.Model, fixed_base: bool, base_placement: pin.SE3 | None, root_inertia: pin.Inertia | None,
+              lowers: list[float], uppers: list[float]) -> tuple[int, pin.SE3, int]:
+    """The base the first bones attach to: (joint, placement, frame): the world (at
+    ``base_placement``) or a free-flyer ``root`` with ``root_inertia``."""
+    if fixed_base:
+        return 0, base_placement if base_placement is not None else pin.SE3.Identity(), 0
+    base_joint = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
+    lowers += [-np.inf] * 7
+    uppers += [np.inf] * 7
+    jf0 = model.addJointFrame(base_joint, 0)
+    base_frame = model.addBodyFrame("root", base_joint, pin.SE3.Identity(), jf0)
+    if root_inertia is not None:
+        model.appendBodyToJoint(base_joint, root_inertia, pin.SE3.Identity())
+    return base_joint, pin.SE3.Identity(), base_frame
+
+
+def _add_bone(model: pin.Model, bn: str, dofs: list[str], limits: list[tuple[float, float]], inertia: pin.Inertia,
+              parent: tuple[int, pin.SE3, int], lowers: list[float], uppers: list[float]) -> tuple[int, pin.SE3, int]:
+    """Bone ``bn``: a revolute joint per free dof (``limits`` in degrees, in the order added:
+    reversed dofs) or a fixed frame, and its body; returns its (joint, body placement, frame)."""
+    pj, placement, pf = parent
+    if not dofs:
+        jf = model.addFrame(pin.Frame(f"{bn}_joint", pj, pf, placement, pin.FrameType.FIXED_JOINT))
+        fid = model.addFrame(pin.Frame(bn, pj, jf, placement, pin.FrameType.BODY))
+        model.appendBodyToJoint(pj, inertia, placement)
+        return pj, placement, fid
+    jid, jp, jf = pj, placement, pf
+    for d, (lo, hi) in zip(reversed(dofs), limits):
+        jid = model.addJoint(jid, _JOINTS[d[1]](), jp, f"{bn}_{d}")
+        jp = pin.SE3.Identity()
+        lowers.append(np.deg2rad(lo))
+        uppers.append(np.deg2rad(hi))
+        jf = model.addJointFrame(jid, jf)
+    fid = model.addBodyFrame(bn, jid, pin.SE3.Identity(), jf)
+    model.appendBodyToJoint(jid, inertia, pin.SE3.Identity())
+    return jid, pin.SE3.Identity(), fid
+
+
 def build_model(skeleton: Skeleton,
                 inertias: Mapping[str, pin.Inertia] | None = None,
                 root_inertia: pin.Inertia | None = None,
@@ -104,53 +142,22 @@ def build_model(skeleton: Skeleton,
     uppers: list[float] = []
     # (joint id, body frame placement in joint frame, frame id) per bone
     attach: dict[str, tuple[int, pin.SE3, int]] = {}
-    if fixed_base:
-        base_joint = 0
-        base_frame = 0
-        base = base_placement if base_placement is not None else pin.SE3.Identity()
-    else:
-        base_joint = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
-        lowers += [-np.inf] * 7
-        uppers += [np.inf] * 7
-        jf0 = model.addJointFrame(base_joint, 0)
-        base_frame = model.addBodyFrame("root", base_joint, pin.SE3.Identity(), jf0)
-        if root_inertia is not None:
-            model.appendBodyToJoint(base_joint, root_inertia, pin.SE3.Identity())
-        base = pin.SE3.Identity()
+    base = _add_base(model, fixed_base, base_placement, root_inertia, lowers, uppers)
     for bn in order:
         b = skeleton.bones[bn]
         par = b.parent
-        if par in attach:
+        if par is not None and par in attach:
             pj, pM, pf = attach[par]
             Cp = C[par]
             pb = skeleton.bones[par]
-            rel = pin.SE3(Cp.T @ C[bn], Cp.T @ (pb.direction * pb.length * u))
-            placement = pM * rel
+            placement = pM * pin.SE3(Cp.T @ C[bn], Cp.T @ (pb.direction * pb.length * u))
         else:  # attached to the base (root child, or first bone of a sub-chain)
-            pj, pf = base_joint, base_frame
-            placement = base * pin.SE3(P @ C[bn], np.zeros(3))
+            pj, _, pf = base
+            placement = base[1] * pin.SE3(P @ C[bn], np.zeros(3))
         dofs = [d for d in b.dof if d not in locked.get(bn, [])]
-        lim = {d: l for d, l in zip(b.dof, b.limits)}
-        inertia = inertias.get(bn, pin.Inertia.Zero())
-        if dofs:
-            jid = pj
-            jp = placement
-            jf = pf
-            for d in reversed(dofs):
-                jid = model.addJoint(jid, _JOINTS[d[1]](), jp, f"{bn}_{d}")
-                jp = pin.SE3.Identity()
-                lo, hi = lim.get(d, (-180.0, 180.0))
-                lowers.append(np.deg2rad(lo))
-                uppers.append(np.deg2rad(hi))
-                jf = model.addJointFrame(jid, jf)
-            fid = model.addBodyFrame(bn, jid, pin.SE3.Identity(), jf)
-            model.appendBodyToJoint(jid, inertia, pin.SE3.Identity())
-            attach[bn] = (jid, pin.SE3.Identity(), fid)
-        else:
-            jf = model.addFrame(pin.Frame(f"{bn}_joint", pj, pf, placement, pin.FrameType.FIXED_JOINT))
-            fid = model.addFrame(pin.Frame(bn, pj, jf, placement, pin.FrameType.BODY))
-            model.appendBodyToJoint(pj, inertia, placement)
-            attach[bn] = (pj, placement, fid)
+        limits = [dict(zip(b.dof, b.limits)).get(d, (-180.0, 180.0)) for d in reversed(dofs)]
+        attach[bn] = _add_bone(model, bn, dofs, limits, inertias.get(bn, pin.Inertia.Zero()), (pj, placement, pf),
+                               lowers, uppers)
         jid, M, fid = attach[bn]
         end = M * pin.SE3(np.eye(3), C[bn].T @ (b.direction * b.length * u))
         model.addFrame(pin.Frame(f"{bn}_end", jid, fid, end, pin.FrameType.OP_FRAME))

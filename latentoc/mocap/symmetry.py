@@ -73,8 +73,8 @@ class SymmetryMap:
         self.right_names: list[str] = []
         for name in names_by_q:
             bone, dof = name.rsplit("_", 1)
-            if bone.startswith("r") and mirror_partner(bone, skeleton):
-                left = mirror_partner(bone, skeleton)
+            left = mirror_partner(bone, skeleton) if bone.startswith("r") else None
+            if left is not None:
                 f = mirror_sign(skeleton, left, bone, dof)
                 self.copied.append((jq[name], ypos[f"{left}_{dof}"], f))
                 self.right_names.append(name)

@@ -11,6 +11,7 @@ whole set of a result folder from its files alone (``python -m latentoc plot RES
 * :mod:`.convergence`: Ipopt's per-iteration history
 * :mod:`.studies`: gain against tube size, new start poses
 * :mod:`.kinematics`: the stick figure's bones (shared with the animation and the 3-D view)
+* :mod:`.animation`: the motion as a GIF, and the live 3-D view (meshcat or viser)
 """
 from .contact import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com, polygon_margin
 from .convergence import plot_convergence

@@ -17,6 +17,7 @@ import pinocchio as pin
 from matplotlib.figure import Figure
 
 from ..results import Result, load_result
+from .animation import animate
 from .contact import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com
 from .convergence import plot_convergence
 from .figure import FORMATS, save
@@ -114,8 +115,6 @@ def plot_solution(result: Result | str | Path, max_joints: int = 12, plane: str 
     written = [save(fig, out / f"{name}.{format}", format) for name, fig in
                solution_figures(result, max_joints, plane).items()]
     if gif:
-        from ..animation import animate
-
         traj = result.trajectory
         model = model_of(traj)
         written.append(animate(model, traj["t"], traj["q"], out / "motion.gif", fps=20,  # 5 cs a frame, exactly
