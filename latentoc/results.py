@@ -37,7 +37,7 @@ from .tube import TubeResult
 
 __all__ = ["Result", "Times", "Environment", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
            "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",
-           "HISTORY_KEYS"]
+           "HISTORY_KEYS", "result_and_output"]
 
 SCHEMA_VERSION = 1
 RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME = "result.json", "trajectory.npz", "gpdm.npz"
@@ -360,6 +360,18 @@ def load_result(out_dir: str | Path) -> Result:
 
 
 _plain = plain  # JSON-ready values (latentoc.files.plain)
+
+
+def result_and_output(result: Result | str | Path, out: str | Path | None, name: str, who: str) -> tuple[Result, Path]:
+    """``result``, or the Result read from the folder a path names, and where ``who`` writes:
+    ``out``, else ``name`` in that folder (a ValueError for a Result not read from a folder)."""
+    if not isinstance(result, Result):
+        folder = Path(result)
+        result = load_result(folder)
+        out = folder / name if out is None else out
+    if out is None:
+        raise ValueError(f"{who} needs the output path for a Result that was not read from a folder")
+    return result, Path(out)
 
 
 def _npz_bytes(arrays: dict[str, Any]) -> bytes:

@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
 
-from ..results import Result, load_result
+from ..results import Result, result_and_output
 from .animation import animate
 from .contact import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com
 from .convergence import plot_convergence
@@ -105,13 +105,7 @@ def plot_solution(result: Result | str | Path, max_joints: int = 12, plane: str 
     pdf or svg), with ``gif`` also ``motion.gif``; returns the paths."""
     if format not in FORMATS:
         raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
-    if not isinstance(result, Result):
-        folder = Path(result)
-        result = load_result(folder)
-        out_dir = folder / "plots" if out_dir is None else out_dir
-    if out_dir is None:
-        raise ValueError("plot_solution needs out_dir for a Result that was not read from a folder")
-    out = Path(out_dir)
+    result, out = result_and_output(result, out_dir, "plots", "plot_solution")
     written = [save(fig, out / f"{name}.{format}", format) for name, fig in
                solution_figures(result, max_joints, plane).items()]
     if gif:

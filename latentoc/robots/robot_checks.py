@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -55,40 +57,45 @@ def inertia_problem(mass: float, inertia: np.ndarray) -> str | None:
     return None
 
 
+def _tagged(root: ET.Element, tag: str, child: str, path: Path) -> Iterator[tuple[str, ET.Element]]:
+    """(what, <child>) of every <tag> that has a <child>; ``what`` names the file and the tag."""
+    for element in root.iter(tag):
+        found = element.find(child)
+        if found is not None:
+            yield f"URDF {path}: {tag} {element.get('name')!r}:", found
+
+
+@contextmanager
+def _naming(what: str) -> Iterator[None]:
+    """A ValueError raised inside, its message after ``what``."""
+    try:
+        yield
+    except ValueError as exc:
+        raise ValueError(f"{what} {exc}") from None
+
+
 def check_urdf(root: ET.Element, path: Path) -> None:
     """A ValueError naming ``path`` and the link or joint whose mass, inertia or limits are wrong."""
-    for link in root.iter("link"):
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        what = f"URDF {path}: link {link.get('name')!r}:"
-        try:
+    for what, inertial in _tagged(root, "link", "inertial", path):
+        with _naming(what):
             mass_el = inertial.find("mass")
             mass = 0.0 if mass_el is None else _number(mass_el, "value", "mass")
             inertia_el = inertial.find("inertia")
             values = {k: 0.0 if inertia_el is None else _number(inertia_el, k, "inertia", "0") for k in _INERTIA_KEYS}
-        except ValueError as exc:
-            raise ValueError(f"{what} {exc}") from None
-        inertia = np.array([[values["ixx"], values["ixy"], values["ixz"]],
-                            [values["ixy"], values["iyy"], values["iyz"]],
-                            [values["ixz"], values["iyz"], values["izz"]]])
-        problem = inertia_problem(mass, inertia)
-        if problem is not None:
-            raise ValueError(f"{what} {problem}")
-    for joint in root.iter("joint"):
-        limit = joint.find("limit")
-        if limit is None:
-            continue
-        what = f"URDF {path}: joint {joint.get('name')!r}:"
-        try:
+            inertia = np.array([[values["ixx"], values["ixy"], values["ixz"]],
+                                [values["ixy"], values["iyy"], values["iyz"]],
+                                [values["ixz"], values["iyz"], values["izz"]]])
+            problem = inertia_problem(mass, inertia)
+            if problem is not None:
+                raise ValueError(problem)
+    for what, limit in _tagged(root, "joint", "limit", path):
+        with _naming(what):
             values = {k: _number(limit, k, "limit") for k in ("lower", "upper", "velocity", "effort") if k in limit.attrib}
-        except ValueError as exc:
-            raise ValueError(f"{what} {exc}") from None
-        if "lower" in values and "upper" in values and values["lower"] > values["upper"]:
-            raise ValueError(f"{what} limit lower={values['lower']:g} is above upper={values['upper']:g}")
-        negative = [k for k in ("velocity", "effort") if values.get(k, 0.0) < 0]
-        if negative:
-            raise ValueError(f"{what} limit {negative[0]}={values[negative[0]]:g} is negative")
+            if "lower" in values and "upper" in values and values["lower"] > values["upper"]:
+                raise ValueError(f"limit lower={values['lower']:g} is above upper={values['upper']:g}")
+            negative = [k for k in ("velocity", "effort") if values.get(k, 0.0) < 0]
+            if negative:
+                raise ValueError(f"limit {negative[0]}={values[negative[0]]:g} is negative")
 
 
 def check_model(model: pin.Model, where: str) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ..results import Result, load_result
+from ..results import Result, result_and_output
 from .scene import build_scene
 
 __all__ = ["write_html", "page_html", "THREE_VERSION"]
@@ -75,13 +75,7 @@ def page_html(scene: dict) -> str:
 def write_html(result: Result | str | Path, path: str | Path | None = None, rate_hz: float = 50.0) -> Path:
     """Write the 3-D view of a result (or of the result folder a path names) to ``path`` (default:
     the folder's ``view.html``); returns the path."""
-    if not isinstance(result, Result):
-        folder = Path(result)
-        result = load_result(folder)
-        path = folder / "view.html" if path is None else path
-    if path is None:
-        raise ValueError("write_html needs a path for a Result that was not read from a folder")
-    out = Path(path)
+    result, out = result_and_output(result, path, "view.html", "write_html")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(page_html(build_scene(result, rate_hz)), encoding="utf-8")
     return out
