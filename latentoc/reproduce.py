@@ -9,14 +9,13 @@ them (``python -m latentoc reproduce`` writes docs/reproduction.md).
 from __future__ import annotations
 
 import datetime
-import platform
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from . import __version__
+from .environment import Environment
 from .problem_files import load_problem
 from .results import Result
 
@@ -68,22 +67,11 @@ NOTES = {
 
 
 def environment() -> dict[str, str]:
-    """The machine and the versions a reproduction ran with."""
-    import casadi
-    import pinocchio
-    import scipy
-
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            names = [line.split(":", 1)[1].strip() for line in f if line.startswith("model name")]
-        if names:
-            cpu = f"{names[0]} ({len(names)} CPUs)"
-    except OSError:
-        pass
-    return {"date": datetime.date.today().isoformat(), "cpu": cpu, "python": platform.python_version(),
-            "latentoc": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
-            "casadi": str(getattr(casadi, "__version__", "?")), "pinocchio": str(getattr(pinocchio, "__version__", "?"))}
+    """The machine and the versions a reproduction ran with, and the day."""
+    env = Environment.current()
+    return {"date": datetime.date.today().isoformat(), "cpu": f"{env.cpu} ({env.cpu_count} CPUs)",
+            "python": env.python, "latentoc": env.latentoc, "numpy": env.numpy, "scipy": env.scipy,
+            "casadi": env.casadi, "pinocchio": env.pinocchio}
 
 
 @dataclass

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import io
 import json
-import os
-import platform
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, fields
@@ -28,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from .environment import Environment
 from .errors import ResultFileError
 from .files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
 from .gpdm import GPDM
@@ -35,7 +34,7 @@ from .kind import Solution
 from .problem import Problem
 from .tube import TubeResult
 
-__all__ = ["Result", "Times", "Environment", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
+__all__ = ["Result", "Times", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
            "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",
            "HISTORY_KEYS", "result_and_output"]
 
@@ -111,44 +110,6 @@ class Times:
     solve_s: float = 0.0
     check_s: float = 0.0
     total_s: float = 0.0
-
-
-@dataclass(frozen=True)
-class Environment:
-    """Where a result was computed: package versions, CPU, threads."""
-
-    latentoc: str
-    casadi: str
-    pinocchio: str
-    numpy: str
-    python: str
-    cpu: str
-    cpu_count: int
-    threads: int
-    scipy: str = "?"  # results saved before it was recorded load without it
-
-    @classmethod
-    def current(cls) -> Environment:
-        import casadi
-        import pinocchio
-        import scipy
-
-        from .version import __version__
-        from .nlp.jit import threads
-
-        return cls(latentoc=__version__, casadi=casadi.CasadiMeta.version(), pinocchio=getattr(pinocchio, "__version__", "?"),
-                   numpy=np.__version__, python=platform.python_version(), cpu=_cpu_name(),
-                   cpu_count=os.cpu_count() or 1, threads=threads(), scipy=scipy.__version__)
-
-
-def _cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 # the kind contract's result keys that become core fields (the rest are the kind's details)

@@ -6,7 +6,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.results import Environment, Result, Times
+from latentoc.environment import Environment
+from latentoc.results import Result, Times
 from latentoc.tube import TubeResult
 
 
