@@ -7,6 +7,7 @@ solve that Ipopt does not finish successfully exits with code 1 and writes nothi
 ``--keep-failed``; a sweep with failed or unsuccessful tasks writes the others and exits with
 code 1. Ctrl-C prints ``latentoc: interrupted`` and exits with code 130, writing no result of the
 interrupted solve; a closed stdout (``latentoc list | head``) ends quietly with code 141.
+This module parses the command line; each command is :mod:`latentoc.commands`' ``cmd_<name>``.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ import pytest
 
 from latentoc.errors import LatentocError, ProblemError
 from latentoc.gpdm import GPDMSettings
-from latentoc.kinds import kind_of
+from latentoc.kinds import KINDS, kind_of
 from latentoc.min_torque.training import training_frames
 from latentoc.problem import describe_problem
 from latentoc.problem_files import load_problem, problem_from_dict, problem_names
@@ -174,3 +174,13 @@ def test_parse_tube():
     for bad in (-1.0, 0, "x", "abc", "-2x", True):
         with pytest.raises(ProblemError):
             parse_tube(bad)
+
+
+def test_every_setting_of_every_kind_is_described():
+    """`latentoc show` says what each key of each kind means, not only what its value must be."""
+    from latentoc.schema import Table
+
+    for kind in KINDS.values():
+        for s in kind.schema.settings:
+            for t in (s.settings if isinstance(s, Table) else (s,)):
+                assert t.doc and t.doc != t.check.what and not t.doc.startswith("JumpSettings."), (kind.name, t.key)
