@@ -42,7 +42,7 @@ class Margins:
 
 
 SEED = Margins(torque=0.25, wrench=0.05, cop=0.01, polygon=0.02, tube=0.05)  # at a phase's start
-NEAR = Margins(torque=0.02, wrench=0.005, cop=0.001, polygon=0.001, tube=0.002)  # after a solve
+NEAR = Margins(torque=0.05, wrench=0.01, cop=0.002, polygon=0.002, tube=0.005)  # after a solve
 # what counts as violated on the 1 kHz grid (torque in N m, wrench in N, lengths in m, tube in delta):
 # far below what the physics can tell apart, and above what Ipopt holds the rows to
 TOLERANCE = Margins(torque=0.01, wrench=0.1, cop=1e-4, polygon=1e-5, tube=1e-6)
