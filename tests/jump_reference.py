@@ -96,7 +96,7 @@ def flight_base(model, data, smap, y, yd, pitch, L, c, cd):
 
 def polygon_rows(heel, toe, p):
     """Rows of the feet's support polygon (vertices heel_R, toe_R, toe_L, heel_L) at p (x, y)."""
-    from latentoc.jump.support_polygon import polygon_from_vertices
+    from latentoc.support_polygon import polygon_from_vertices
 
     A, b = polygon_from_vertices([[heel[0], -heel[1]], [toe[0], -toe[1]], toe[:2], heel[:2]])
     return A @ np.asarray(p, float)[:2] + b

@@ -104,27 +104,27 @@ def test_a_warm_start_is_taken_from_a_smaller_solved_tube_only():
 
 def test_warm_start_carries_the_point_and_multipliers_of_phase_2(small_jump):
     """JumpSolution.warm_start: the tube, the solution's point and its multipliers (lam_g, lam_x)
-    with the NLP they belong to and its samples, what the next tube's solve starts from."""
+    with the NLP they belong to (its rows and samples), what the next tube's solve starts from."""
     jn = small_jump.nlp
     rng = np.random.default_rng(0)
     x, lam_g, lam_x = small_jump.x0, rng.standard_normal(jn.nlp.m), rng.standard_normal(jn.variables.n)
     run = IpoptResult(x=x, f=0.0, g=jn.nlp.constraints(x), lam_g=lam_g, lam_x=lam_x, status="Solve_Succeeded",
                       success=True, iterations=3, time_s=0.1)
-    warm = JumpSolution(jn, x, run, None, {"tube": 0.02}).warm_start()
-    assert warm["tube"] == 0.02 and warm["nlp"] is jn and warm["samples"] is jn.meta["samples"]
+    warm = JumpSolution(jn, x, run, None, {}, {}, {"tube": 0.02}).warm_start()
+    assert warm["tube"] == 0.02 and warm["nlp"] is jn and len(warm["nlp"].selection.contact) > 0
     for key, value in (("x0", x), ("lam_g0", lam_g), ("lam_x0", lam_x)):
         np.testing.assert_array_equal(warm[key], value)
 
 
 def test_a_warm_start_that_does_not_fit_the_nlp_is_refused_by_name(small_jump):
-    """A warm start whose point has another number of variables than the NLP is a ValueError
+    """A warm start whose point has another number of variables than its NLP is a ValueError
     naming the warm start and both sizes, before any solve."""
     sj = small_jump
     n, m = sj.nlp.variables.n, sj.nlp.nlp.m
-    bad = {"tube": 0.02, "x0": np.zeros(n + 3), "lam_g0": np.zeros(m), "lam_x0": np.zeros(n + 3)}
-    settings = dataclasses.replace(sj.settings, exchange=False)  # no 1 kHz probe NLP to build
+    bad = {"tube": 0.02, "nlp": sj.nlp, "x0": np.zeros(n + 3), "lam_g0": np.zeros(m), "lam_x0": np.zeros(n + 3)}
+    settings = dataclasses.replace(sj.settings, exchange=False)
     with pytest.raises(ValueError, match="warm start: its point") as exc:
-        solve_jump(sj.robot, sj.layer, sj.blocks, sj.js.phases, settings, sj.js.init, warm=bad)
+        solve_jump(sj.robot, sj.layer, sj.blocks, sj.js.phases, settings, sj.js.init, sj.js.model, warm=bad)
     assert str(n + 3) in str(exc.value) and str(n) in str(exc.value)
 
 

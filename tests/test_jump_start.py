@@ -45,8 +45,8 @@ def test_initial_point_fits_the_training_motion(small_jump):
         resid = B @ coef - base[sel]
         np.testing.assert_allclose(B.T @ resid, 0.0, atol=1e-9)
         assert np.abs(resid).max() < 0.05  # m, rad: the captured base, smoothed
-    at_touchdown = [ph.loaded(p, np.array([ph.touchdown]))[0] for p in ("heel", "ball", "toe")]
-    assert at_touchdown == [False, False, True]  # the landing is toe-first
+    at_touchdown = [ph.loaded(p, np.array([ph.touchdown]))[0] for p in ("heel", "ball", "toe", "pad")]
+    assert at_touchdown == [False, False, True, True]  # the landing is toe-first (the toes' tip and pad)
     np.testing.assert_array_equal(parts["lam_impact"], 0.5 * np.repeat(at_touchdown, 2))
 
 

@@ -26,12 +26,12 @@ from ..kind import Solution
 from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..spline import BSpline
-from ..tube import TUBE, resolve_tube
+from ..tube import TUBE, relative_tube, resolve_tube
 from .contact import POINTS, FootGeometry, foot_points
 from .phases import Phases, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
-from .settings import JumpSettings
+from .settings import FIELD_DOCS, JumpSettings
 from .solve import JumpSolution, solve_jump
 from .torque_limits import TrainingDynamics, estimate_training_dynamics
 from .training import JumpTraining, jump_model, training_jumps
@@ -185,7 +185,7 @@ SCHEMA = Schema("broad-jump", (
     Table("options", "options", tuple(
         [Setting(k, k, c, d, doc) for k, (c, d, doc) in SETUP_OPTIONS.items()]
         + [Setting(_TOML_NAMES.get(f.name, f.name), _TOML_NAMES.get(f.name, f.name),
-                   _field_check(f.name, f.type if isinstance(f.type, str) else f.type.__name__), getattr(_DEFAULTS, f.name), f"JumpSettings.{f.name}")
+                   _field_check(f.name, f.type if isinstance(f.type, str) else f.type.__name__), getattr(_DEFAULTS, f.name), FIELD_DOCS[f.name])
            for f in fields(JumpSettings) if f.name not in _ELSEWHERE]),
         "the set-up's keys and the JumpSettings fields (latentoc/jump/settings.py)"),
 ), "the CMU humanoid's standing broad jump (Sect. 4.2)")
@@ -306,7 +306,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
               "distance_initial": js.distance_training,
               "performance_gain_pct": 100.0 * (r["distance"] - js.distance_training) / js.distance_training,
               "training_points": int(js.gpdm.X.shape[0]), "tube_training": js.gpdm.tube_size(),
-              "tube_relative": delta * js.gpdm.beta[2], "latent_dim": js.gpdm.latent_dim,
+              "tube_relative": relative_tube(delta, js.gpdm), "latent_dim": js.gpdm.latent_dim,
               "max_sigma2": float(np.max(traj["sigma2"])), "control_points": s.n_control,
               "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
               "build_time_s": sol.result["times"]["build_s"], "solve_time_s": sol.result["times"]["solve_s"],

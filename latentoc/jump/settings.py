@@ -32,3 +32,26 @@ class JumpSettings:
     hessian: str = "exact"  # or "lbfgs"
     max_iter: int = 1500
     tol: float = 1e-5
+
+
+#: what each field sets, one line each (``latentoc show``); tube, n_control, hessian, max_iter and tol
+#: are set by other tables of a problem file and described there
+FIELD_DOCS: dict[str, str] = {
+    'n_stance': 'contact nodes of the stance, every 10 ms',
+    'n_flight': 'flight nodes, every 5 ms',
+    'n_land': 'contact nodes of the landing, touchdown to the end',
+    'n_base_stance': "control points of the stance's (x, z, pitch) base spline",
+    'n_base_land': "control points of the landing's (x, z, pitch) base spline",
+    'foot_tolerance': 'm the toe tip may move from its ground point in contact',
+    'ball_tolerance': 'm an unloaded ball may sink below the ground (soft sole)',
+    'contact_tolerance': 'm a loaded heel or ball stays within this of the ground',
+    'flight_substeps': 'trapezoid steps of the pitch rate per flight node interval',
+    'tube_spacing': "s between the tube's points",
+    'sample_spacing': 's between the contact and flight samples of phase 2 (0: none)',
+    'exchange': 'rows grow where the 1 kHz grid is violated (the exchange)',
+    'exchange_rounds': 'solves of the exchange at the most',
+    'torque_limits': 'the torque limits of Eq. 34',
+    'polygon': 'ZMP and COM in the support polygon in the landing (Eq. 35-36)',
+    'two_phase': 'phase 1, the feasible point nearest the training fit, before phase 2, the distance',
+    'mu': 'friction coefficient mu of the foot points (Table 5)',
+}

@@ -19,7 +19,7 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   ``cop_margin_loaded``, against the rearmost loaded point (the heel, else the ball, else a
   ``toe_pad`` behind the toe tip);
 * ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
-  projected COM against the support polygon (:mod:`.support_polygon`) during landing
+  projected COM against the support polygon (:mod:`latentoc.support_polygon`) during landing
   (COM once settled);
 * joint torques ``rnea[6:] - (J^T w)[6:]`` against tau_min, tau_max (joints with a
   non-zero range; the others must vanish by symmetry);
@@ -40,7 +40,7 @@ import numpy as np
 import pinocchio as pin
 
 from .contact import TOE_PAD, FootGeometry, foot_points, point_jacobians
-from .support_polygon import feet_polygon
+from ..support_polygon import feet_polygon
 from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
 
@@ -60,7 +60,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     sums up (module doc): ``torque`` (n, joints with a range; N m to the nearer limit), ``normal``
     (needed fz, N), ``friction`` (mu fz - |fx|, N), ``cop`` (m inside the loaded support),
     ``point_cone`` (N, over the exported point forces), ``zmp`` and ``com`` (n, 4: m inside each
-    edge of the support polygon, :func:`~.support_polygon.feet_polygon`), each NaN where it does
+    edge of the support polygon, :func:`latentoc.support_polygon.feet_polygon`), each NaN where it does
     not apply (flight; ZMP before touchdown, COM before settling)."""
     t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
     Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)

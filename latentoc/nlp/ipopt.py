@@ -9,7 +9,6 @@ primal point and multipliers are arguments, never module state.
 """
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -18,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from ..progress import bar
+from ..threads import openblas_threads_at_load
 from .assemble import SparseNLP
 
 __all__ = ["IpoptResult", "solve", "load_ipopt", "HESSIANS", "DEFAULT_OPTIONS", "WARM_START_OPTIONS"]
@@ -61,14 +61,8 @@ def load_ipopt() -> None:
     global _IPOPT_LOADED
     if _IPOPT_LOADED:
         return
-    unset = "OPENBLAS_NUM_THREADS" not in os.environ
-    if unset:
-        os.environ["OPENBLAS_NUM_THREADS"] = "1"
-    try:
+    with openblas_threads_at_load(1):
         ca.load_nlpsol("ipopt")
-    finally:
-        if unset:
-            del os.environ["OPENBLAS_NUM_THREADS"]
     _IPOPT_LOADED = True
 
 

@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
-from scipy.spatial import ConvexHull
 
+from ..support_polygon import margin, support_polygon
 from .figure import LIMIT_STYLE, new_figure, panel_axes
 
 __all__ = ["contact_series", "polygon_margin", "plot_contact_forces", "plot_contact_margins", "plot_zmp_com"]
@@ -25,10 +25,7 @@ __all__ = ["contact_series", "polygon_margin", "plot_contact_forces", "plot_cont
 
 def polygon_margin(polygon: np.ndarray, p: np.ndarray) -> float:
     """Distance of point p (x, y) inside the convex polygon (k, 2), negative outside."""
-    V = np.asarray(polygon, dtype=float)[ConvexHull(polygon).vertices]  # counter-clockwise
-    E = np.roll(V, -1, axis=0) - V
-    n = np.column_stack([E[:, 1], -E[:, 0]]) / np.linalg.norm(E, axis=1, keepdims=True)  # outward normals
-    return float(-np.max(np.sum(n * (np.asarray(p, dtype=float)[:2] - V), axis=1)))
+    return margin(*support_polygon(polygon), p)
 
 
 def _feet(model: pin.Model, data: pin.Data, frames: list[str], heel_offset: np.ndarray) -> np.ndarray:

@@ -14,7 +14,7 @@ import casadi as ca
 from ...nlp.blocks import RobotBlock
 from ..contact import EDGES, TOE_PAD, point_forces, point_generalized_force, toe_wrench
 from ..robot import SAGITTAL_ROWS, JumpRobot, galilean
-from ..support_polygon import symbolic_rows
+from ...support_polygon import symbolic_rows
 from . import inputs
 
 INPUTS = {"b": 3, "bd": 3, "bdd": 3, "x_pin": 1, "lam": EDGES}
