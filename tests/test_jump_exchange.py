@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from latentoc.jump.exchange import TOLERANCE, _picked, violated
+from latentoc.jump.exchange import TOLERANCE, violated
+from latentoc.nlp.exchange import worst_times
 from latentoc.jump.selection import Selection
 
 
@@ -13,7 +14,7 @@ def test_a_stretch_near_its_bound_gets_its_least_slack_and_a_sample_every_spacin
     t = np.arange(300)
     slack = np.where((t >= 100) & (t < 140), 0.5 * ((t - 123) / 20.0) ** 2, 1.0)
     slack[250], slack[251] = 0.0, -0.01
-    picked = _picked(slack, slack < 0.4, spacing=5, neighbours=2)
+    picked = worst_times(slack, slack < 0.4, spacing=5, neighbours=2)
     assert 123 in picked and 251 in picked and 249 in picked and 253 in picked
     inside = picked[(picked >= 100) & (picked < 140)]
     stretch = np.flatnonzero((slack < 0.4) & (t >= 100) & (t < 140))
@@ -23,7 +24,7 @@ def test_a_stretch_near_its_bound_gets_its_least_slack_and_a_sample_every_spacin
 
 
 def test_no_stretch_no_sample():
-    assert _picked(np.ones(50), np.zeros(50, bool), 5, 2).size == 0
+    assert worst_times(np.ones(50), np.zeros(50, bool), 5, 2).size == 0
 
 
 @pytest.mark.parametrize("kind, unit", [("torque", TOLERANCE.torque), ("cop", TOLERANCE.cop),

@@ -22,8 +22,8 @@ def _node_base_rows(sj, parts, t):
     q, v, a = full_state(js.smap, *b, y, yd, ydd)
     W = robot.weight
     c = pin.rnea(model, data, q, v, a)[SAGITTAL] / W
-    A = np.column_stack([generalized_force(model, data, q, js.geom.heel_offset, point_forces(e, robot.mu))[SAGITTAL]
-                         for e in np.eye(6)])
+    A = np.column_stack([generalized_force(model, data, q, js.geom, point_forces(e, robot.mu))[SAGITTAL]
+                         for e in np.eye(8)])
     return c, A
 
 
@@ -62,7 +62,7 @@ def test_balanced_forces_fit_the_base_rows_with_nonnegative_loaded_edges(small_j
     lam = parts["lam"]
     tc = np.concatenate([jn.grid["stance"], jn.grid["land"]])
     ub = jn.ubx[jn.variables.index("lam")]
-    loaded = np.repeat(np.column_stack([ph.loaded(p, tc) for p in ("heel", "ball", "toe")]), 2, axis=1)
+    loaded = np.repeat(np.column_stack([ph.loaded(p, tc) for p in ("heel", "ball", "toe", "pad")]), 2, axis=1)
     np.testing.assert_array_equal(ub > 0, loaded)
     assert (~loaded[:, 0]).sum() >= 2 and loaded[:, 4].all()
     assert np.all(lam >= 0) and np.all(lam[~loaded] == 0)
@@ -72,10 +72,11 @@ def test_balanced_forces_fit_the_base_rows_with_nonnegative_loaded_edges(small_j
         tol = 1e-8 * max(1.0, np.abs(A).max() * np.abs(c).max())
         assert np.all(grad[loaded[k]] >= -tol), (k, grad)
         assert np.all(np.abs(grad[loaded[k] & (lam[k] > 1e-9)]) <= tol), (k, grad)
-        uniform = np.where(loaded[k], 1.0 / 12.0, 0.0)
+        uniform = np.where(loaded[k], 1.0 / 16.0, 0.0)
         assert np.linalg.norm(c - A @ lam[k]) <= np.linalg.norm(c - A @ uniform) + 1e-12
     # the NLP's dynamics rows at the start are these residuals
-    dyn = jn.nlp.constraints(sj.x0)[jn.row_names == "dynamics"].reshape(-1, 3)
+    dyn = jn.nlp.constraints(sj.x0)[jn.family_rows("contact")][jn.row_names[jn.family_rows("contact")] == "dynamics"]
+    dyn = dyn.reshape(-1, 3)
     assert dyn.shape == (len(tc), 3) and np.linalg.norm(dyn) > 0
     x = np.array(sj.x0)
     x[jn.variables.index("lam")] = np.random.default_rng(2).uniform(0.0, 1.0, lam.shape)

@@ -8,7 +8,8 @@ the support polygon, the tube. Every violated or nearly violated stretch adds a 
 worst 1 kHz time and its neighbours (contact: its own edge weights and the rows that are near
 there; flight: its own free-fall variables and torque rows; the tube: a point), and the contact
 nodes' own torque and polygon rows that are near are switched on; then the solve resumes warm
-(:mod:`.warm`). It ends when nothing on the 1 kHz grid is violated beyond :data:`TOLERANCE`.
+(:mod:`.warm`). It ends when nothing on the 1 kHz grid is violated beyond :data:`TOLERANCE`
+(the loop: :func:`latentoc.nlp.exchange.exchange_rounds`).
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..nlp.evaluators import BlockEvaluator
+from ..nlp.exchange import TUBE_TOL, worst_times
 from .nlp import JumpNLP
 from .phases import Phases
 from .robot import JumpRobot
@@ -45,22 +47,7 @@ SEED = Margins(torque=0.25, wrench=0.05, cop=0.01, polygon=0.02, tube=0.05)  # a
 NEAR = Margins(torque=0.05, wrench=0.01, cop=0.002, polygon=0.002, tube=0.005)  # after a solve
 # what counts as violated on the 1 kHz grid (torque in N m, wrench in N, lengths in m, tube in delta):
 # far below what the physics can tell apart, and above what Ipopt holds the rows to
-TOLERANCE = Margins(torque=0.01, wrench=0.1, cop=1e-4, polygon=1e-5, tube=1e-6)
-
-
-def _picked(slack: np.ndarray, below: np.ndarray, spacing: int, neighbours: int) -> np.ndarray:
-    """Indices of samples in each run of ``below``: its least ``slack`` and, along the run, every
-    ``spacing``-th sample of the grid (a bound that holds along a stretch is held along it); a short
-    run also its ``neighbours``-th neighbours on either side (the bound moves a little)."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], below.astype(np.int8), [0]])))
-    out = []
-    for a, b in zip(edges[::2], edges[1::2]):
-        k = a + int(np.nanargmin(slack[a:b]))
-        grid = np.arange(a, b)
-        out.append(np.concatenate([[k], grid[grid % spacing == 0]]))  # one grid for every row: fewer samples
-        if b - a < spacing:
-            out.append(np.array([k - neighbours, k + neighbours]))
-    return np.unique(np.clip(np.concatenate(out), 0, len(slack) - 1)) if out else np.zeros(0, np.int64)
+TOLERANCE = Margins(torque=0.01, wrench=0.1, cop=1e-4, polygon=1e-5, tube=TUBE_TOL)
 
 
 def _allowed(idx: np.ndarray, allowed: np.ndarray) -> np.ndarray:
@@ -126,20 +113,20 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
     picked_c: set[int] = set()
     picked_f: set[int] = set()
     for j in range(rel.shape[1]):
-        for k in _picked(rel[:, j], torque_near[:, j] & inside, every, nb):
+        for k in worst_times(rel[:, j], torque_near[:, j] & inside, every, nb):
             (picked_c if contact[k] else picked_f).add(k)
     wrench = {"normal": (sr["normal"] / W, m.wrench), "friction": (sr["friction"] / W, m.wrench),
               "point_cone": (sr["point_cone"] / W, m.wrench), "cop_loaded": (sr["cop_loaded"], m.cop)}
     for x, thr in wrench.values():
-        picked_c.update(_picked(x, (x < thr) & contact & inside, every, nb).tolist())
+        picked_c.update(worst_times(x, (x < thr) & contact & inside, every, nb).tolist())
     poly = np.hstack([sr["zmp"], sr["com"]])
     poly_near = poly < m.polygon  # NaN: False
     for e in range(poly.shape[1]):
-        picked_c.update(_picked(poly[:, e], poly_near[:, e] & inside, every, nb).tolist())
+        picked_c.update(worst_times(poly[:, e], poly_near[:, e] & inside, every, nb).tolist())
     kc = _allowed(np.array(sorted(picked_c), int), contact & inside)
     kf = _allowed(np.array(sorted(picked_f), int), ~contact & inside)
     sigma = np.asarray(traj["sigma2"]) / delta
-    kt = _allowed(_picked(-sigma, (sigma > 1.0 - m.tube) & inside, every, nb), inside)
+    kt = _allowed(worst_times(-sigma, (sigma > 1.0 - m.tube) & inside, every, nb), inside)
     node_torque, node_polygon = _node_rows(nlp, w, robot, phases, m)
     return Selection(node_torque, node_polygon, t[kc], torque_near[kc], poly_near[kc], t[kf], torque_near[kf], t[kt])
 

@@ -19,6 +19,7 @@ import pinocchio as pin
 from ..latent.gp_layer import GPLayer
 from ..nlp import ipopt
 from ..nlp.blocks import RobotBlock
+from ..nlp.exchange import Exchange, exchange_rounds
 from . import exchange
 from .export import trajectory
 from .nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times
@@ -80,100 +81,140 @@ def _run_summary(run: ipopt.IpoptResult, nlp: JumpNLP) -> dict:
             **nlp.selection.summary()}
 
 
+class _Solve:
+    """One tube's solve: its clock, how it builds, checks and runs Ipopt (:func:`solve_jump`)."""
+
+    def __init__(self, robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], phases: Phases,
+                 settings: JumpSettings, start: dict, model: pin.Model, verbose: bool):
+        self.robot, self.layer, self.blocks, self.ph, self.s = robot, layer, blocks, phases, settings
+        self.start, self.model, self.clock = start, model, _Clock()
+        self.opts = ipopt_options(settings, verbose)
+        self.tube = tube_times(settings, phases)
+        self.t0 = time.perf_counter()
+        self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
+
+    def lap(self, part: str) -> None:
+        self.t0 = self.clock.add(part, self.t0)
+
+    def build(self, objective: str, selection: Selection) -> JumpNLP:
+        nlp = build_nlp(self.robot, self.layer, self.blocks, self.ph, self.s, self.start["P"], objective, selection)
+        self.lap("build_s")
+        return nlp
+
+    def check(self, nlp: JumpNLP, w: np.ndarray) -> tuple[dict, dict]:
+        """The export of ``w`` on the 1 kHz grid and its constraints' slack there."""
+        traj = trajectory(self.robot, self.layer, self.ph, nlp, w)
+        sr = series(self.model, traj, self.robot.mu)
+        self.last_check = (nlp, w, traj, sr)
+        self.lap("check_s")
+        return traj, sr
+
+    def ipopt(self, nlp: JumpNLP, x: np.ndarray, warm: dict | None, what: str) -> ipopt.IpoptResult:
+        run = ipopt.solve(nlp.nlp, x, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, self.opts, warm=warm,
+                          desc=f"broad jump, delta {self.s.tube:g}: {what}")
+        self.lap("solve_s")
+        return run
+
+    def phase1(self) -> tuple[JumpNLP, np.ndarray, ipopt.IpoptResult | None]:
+        """The training start and, with two phases, the feasible point nearest it: every row of the
+        nodes (Ipopt takes 3x the iterations with only those near binding) and the flight samples
+        near binding at the start."""
+        s, st = self.s, self.start
+        full = self.build("feasibility", Selection.every_node_row(s.n_stance + s.n_land, self.robot.unmirrored.size,
+                                                                  self.tube))
+        x = initial_point(self.robot, self.layer, full, st["P"], st["t"], st["base"], st["x_L"], self.ph.takeoff,
+                          self.ph.touchdown)
+        self.lap("build_s")
+        if not s.two_phase:
+            return full, x, None
+        traj, sr = self.check(full, x)
+        seed = exchange.seed_selection(full, x, traj, sr, self.robot, self.ph, s.tube, self.tube)
+        nodes = full.selection
+        first = nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
+                                       seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
+        nlp1 = self.build("feasibility", first)
+        x1, _ = carried_point(full, nlp1, x)
+        run1 = self.ipopt(nlp1, x1, None, "phase 1 (feasible)")
+        return nlp1, run1.x, run1
+
+    def phase2(self, nlp_start: JumpNLP, x_start: np.ndarray, warm: dict | None
+               ) -> tuple[JumpNLP, ipopt.IpoptResult, list[dict]]:
+        """The distance from ``x_start`` in rounds of the exchange: the start's rows and samples with
+        every row on the packaged grids (rows only where they are near binding at the start took 2-3x
+        the iterations in the later rounds), then the rows the 1 kHz checks add."""
+        s, ph = self.s, self.ph
+        selection = exchange.with_samples(nlp_start.selection, contact_sample_grid(s, ph), flight_sample_grid(s, ph))
+        nlp2 = self.build("distance", selection)
+        x, lam_x = carried_point(nlp_start, nlp2, x_start, warm.get("lam_x0") if warm else None)
+        start: dict = {"x0": x}
+        if warm is not None:
+            start.update(lam_x0=lam_x, lam_g0=carried_multipliers(nlp_start, nlp2, warm["lam_g0"]))
+        self.lap("build_s")
+
+        def check(nlp: JumpNLP, run: ipopt.IpoptResult) -> tuple[Selection | None, dict[str, float]]:
+            traj, sr = self.check(nlp, run.x)
+            worst = exchange.violations(sr, traj, s.tube, self.robot.weight)
+            if not exchange.violated(worst):
+                return None, worst
+            more = nlp.selection.merged(exchange.chosen_rows(nlp, run.x, traj, sr, self.robot, ph, s.tube,
+                                                             exchange.NEAR))
+            grown = more.rows() > nlp.selection.rows() or len(more.contact) > len(nlp.selection.contact)
+            return (more if grown else None), worst  # nothing new: the rows hold to Ipopt's tolerance
+
+        def resume(old: JumpNLP, new: JumpNLP, run: ipopt.IpoptResult) -> dict:
+            x, lam_x = carried_point(old, new, run.x, run.lam_x)
+            self.lap("build_s")
+            return {"x0": x, "lam_x0": lam_x, "lam_g0": carried_multipliers(old, new, run.lam_g)}
+
+        def solve(nlp: JumpNLP, start: dict) -> ipopt.IpoptResult:
+            warm_start = start if "lam_g0" in start else None
+            return self.ipopt(nlp, start["x0"], warm_start, "phase 2 (distance)")
+
+        kind = Exchange(solve=solve, record=lambda nlp, run: {**_run_summary(run, nlp), "history": run.history}, check=check,
+                        grow=lambda nlp, more: self.build("distance", more), resume=resume)
+        return exchange_rounds(nlp2, start, kind, s.exchange_rounds, s.exchange)
+
+
 def solve_jump(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], phases: Phases,
                settings: JumpSettings, start: dict, model: pin.Model, warm: dict | None = None,
                verbose: bool = False) -> JumpSolution:
     """Solve the jump (module doc). ``start`` holds the training start (P, t, base, x_L);
     ``model`` is the numeric model the 1 kHz checks use; ``warm`` is a neighbouring solve's
     :meth:`JumpSolution.warm_start`."""
-    s, ph, clock = settings, phases, _Clock()
-    t0 = time.perf_counter()
-    P = start["P"]
-    tube0 = tube_times(s, ph)
-    opts = ipopt_options(s, verbose)
-
-    def build(objective: str, selection: Selection) -> JumpNLP:
-        return build_nlp(robot, layer, blocks, ph, s, P, objective, selection)
-
-    def check(nlp: JumpNLP, w: np.ndarray) -> tuple[dict, dict]:
-        traj = trajectory(robot, layer, ph, nlp, w)
-        return traj, series(model, traj, robot.mu)
-
-    run1, warm2 = None, None
+    js = _Solve(robot, layer, blocks, phases, settings, start, model, verbose)
     if warm is None:
-        full = build("feasibility", Selection.every_node_row(s.n_stance + s.n_land, robot.unmirrored.size, tube0))
-        x_start = initial_point(robot, layer, full, P, start["t"], start["base"], start["x_L"], ph.takeoff,
-                                ph.touchdown)
-        nlp_start = full
-        if s.two_phase:
-            t0 = clock.add("build_s", t0)
-            traj, sr = check(full, x_start)
-            t0 = clock.add("check_s", t0)
-            seed = exchange.seed_selection(full, x_start, traj, sr, robot, ph, s.tube, tube0)
-            # phase 1: every row of the nodes (Ipopt takes 3x the iterations with the seed's alone) and
-            # the seed's flight samples
-            first = full.selection.merged(Selection(full.selection.node_torque, full.selection.node_polygon,
-                                                    seed.contact[:0], seed.contact_torque[:0],
-                                                    seed.contact_polygon[:0], seed.flight, seed.flight_torque,
-                                                    seed.tube))
-            nlp1 = build("feasibility", first)
-            x1, _ = carried_point(full, nlp1, x_start)
-            t0 = clock.add("build_s", t0)
-            run1 = ipopt.solve(nlp1.nlp, x1, nlp1.lbx, nlp1.ubx, nlp1.lbg, nlp1.ubg, opts,
-                               desc=f"broad jump, delta {s.tube:g}: phase 1 (feasible)")
-            t0 = clock.add("solve_s", t0)
-            x_start, nlp_start = run1.x, nlp1
+        nlp_start, x_start, run1 = js.phase1()
     else:
-        nlp_start, x_start = warm["nlp"], np.asarray(warm["x0"], float)
+        nlp_start, x_start, run1 = warm["nlp"], np.asarray(warm["x0"], float), None
         if x_start.size != nlp_start.variables.n:
             raise ValueError(f"warm start: its point has {x_start.size} variables, its NLP {nlp_start.variables.n}")
-    t0 = clock.add("build_s", t0)
-    traj, sr = check(nlp_start, x_start)
-    t0 = clock.add("check_s", t0)
-    # phase 2: the start's rows and samples with every row on the packaged grids (rows only where
-    # they are near binding at the start took 2-3x the iterations in the exchange's later rounds)
-    selection = exchange.with_samples(nlp_start.selection, contact_sample_grid(s, ph), flight_sample_grid(s, ph))
-    nlp2 = build("distance", selection)
-    x, lam_x = carried_point(nlp_start, nlp2, x_start, warm.get("lam_x0") if warm else None)
-    if warm is not None:
-        warm2 = {"x0": x, "lam_x0": lam_x, "lam_g0": carried_multipliers(nlp_start, nlp2, warm["lam_g0"])}
-    t0 = clock.add("build_s", t0)
-    rounds: list[dict] = []
+    nlp2, run2, rounds = js.phase2(nlp_start, x_start, warm)
+    if js.last_check is None or js.last_check[0] is not nlp2 or js.last_check[1] is not run2.x:
+        js.check(nlp2, run2.x)  # a failed last run: its export all the same
+    _, w, traj, sr = js.last_check  # type: ignore[misc]
     convergence = [{"phase": "1", "round": 1, "history": run1.history}] if run1 else []
-    while True:
-        run2 = ipopt.solve(nlp2.nlp, x, nlp2.lbx, nlp2.ubx, nlp2.lbg, nlp2.ubg, opts, warm=warm2,
-                           desc=f"broad jump, delta {s.tube:g}: phase 2 (distance), round {len(rounds) + 1}")
-        t0 = clock.add("solve_s", t0)
-        traj, sr = check(nlp2, run2.x)
-        worst = exchange.violations(sr, traj, s.tube, robot.weight)
-        t0 = clock.add("check_s", t0)
-        rounds.append({**_run_summary(run2, nlp2), "violation_1khz": worst})
-        convergence.append({"phase": "2", "round": len(rounds), "history": run2.history})
-        if not s.exchange or not run2.success or not exchange.violated(worst) or len(rounds) >= s.exchange_rounds:
-            break
-        more = nlp2.selection.merged(exchange.chosen_rows(nlp2, run2.x, traj, sr, robot, ph, s.tube, exchange.NEAR))
-        if more.rows() == nlp2.selection.rows() and len(more.contact) == len(nlp2.selection.contact):
-            break  # nothing new to add: the violations are in what the rows already hold to tolerance
-        old, nlp2 = nlp2, build("distance", more)
-        x, lam_x = carried_point(old, nlp2, run2.x, run2.lam_x)
-        warm2 = {"x0": x, "lam_x0": lam_x, "lam_g0": carried_multipliers(old, nlp2, run2.lam_g)}
-        t0 = clock.add("build_s", t0)
-    w = run2.x
+    convergence += [{"phase": "2", "round": k + 1, "history": r.pop("history")} for k, r in enumerate(rounds)]
+    result = _result(settings, nlp2, run2, rounds, run1, nlp_start, warm is not None, js.clock)
+    result["convergence"] = convergence
+    return JumpSolution(nlp2, w, run2, run1, traj, sr, result)
+
+
+def _result(s: JumpSettings, nlp2: JumpNLP, run2: ipopt.IpoptResult, rounds: list[dict],
+            run1: ipopt.IpoptResult | None, nlp1: JumpNLP, warm: bool, clock: _Clock) -> dict:
+    """The solve's result fields (:class:`JumpSolution`)."""
     viol = np.maximum(nlp2.lbg - run2.g, 0) + np.maximum(run2.g - nlp2.ubg, 0)
     worst_kind: dict[str, float] = {}
     binding: dict[str, float] = {}
     for name, v, lam in zip(nlp2.row_names, viol, np.abs(run2.lam_g)):
         worst_kind[name] = max(worst_kind.get(name, 0.0), float(v))
         binding[name] = binding.get(name, 0.0) + float(lam)
-    result = {
+    return {
         "tube": s.tube, "status": run2.status, "success": run2.success,
         "iterations": sum(r["iterations"] for r in rounds) + (run1.iterations if run1 else 0),
-        "times": dict(clock.parts), "objective": run2.f, "distance": float(nlp2.variables.unpack(w)["x_L"][0]),
+        "times": dict(clock.parts), "objective": run2.f, "distance": float(nlp2.variables.unpack(run2.x)["x_L"][0]),
         "max_constraint_violation": float(viol.max(initial=0.0)), "constraint_violation_by_kind": worst_kind,
         # sum of |multiplier| per row kind: what binds (torque rows in units of each joint's limit range)
-        "multiplier_by_kind": binding, "warm_start": warm is not None,
-        "phase1": _run_summary(run1, nlp_start) if run1 else {}, "phase2_rounds": rounds,
+        "multiplier_by_kind": binding, "warm_start": warm,
+        "phase1": _run_summary(run1, nlp1) if run1 else {}, "phase2_rounds": rounds,
         "n_variables": int(nlp2.variables.n), "n_constraints": int(nlp2.nlp.m), "settings": asdict(s),
-        "convergence": convergence,
     }
-    return JumpSolution(nlp2, w, run2, run1, traj, sr, result)

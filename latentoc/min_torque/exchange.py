@@ -3,9 +3,9 @@
 The NLP holds the tube and the joint and velocity limits on its constraint grid and the torque
 limits at its quadrature nodes. After a successful Ipopt run the motion is sampled on the 1 kHz
 grid (:func:`.export.sampled_motion`); the worst time of every stretch where it leaves the tube
-(by more than :data:`TUBE_TOL` of delta) or a limit (by more than :data:`LIMIT_TOL`) joins the
-NLP's nodes (:class:`.nlp.Samples`) and Ipopt resumes from the point, for at most
-:data:`EXCHANGE_ROUNDS` runs.
+(by more than :data:`~latentoc.nlp.exchange.TUBE_TOL` of delta) or a limit (by more than
+:data:`LIMIT_TOL`) joins the NLP's nodes (:class:`.nlp.Samples`) and Ipopt resumes from the point,
+for at most :data:`EXCHANGE_ROUNDS` runs (the loop: :func:`latentoc.nlp.exchange.exchange_rounds`).
 """
 from __future__ import annotations
 
@@ -17,21 +17,21 @@ import pinocchio as pin
 
 from ..latent import GPLayer
 from ..nlp import ipopt
+from ..nlp.exchange import TUBE_TOL, Exchange, exchange_rounds
 from ..nlp.ipopt import IpoptResult
 from ..problem import Problem
 from ..results import convergence_entry
 from .export import Solved, sampled_motion
 from .nlp import MinTorqueNLP, Samples, ipopt_options
 
-__all__ = ["TUBE_TOL", "LIMIT_TOL", "EXCHANGE_ROUNDS", "violated_times", "solve_exchanged"]
+__all__ = ["LIMIT_TOL", "EXCHANGE_ROUNDS", "violated_times", "solve_exchanged"]
 
-TUBE_TOL = 1e-6  # sigma^2 on the 1 kHz grid may exceed delta by this fraction of it
 LIMIT_TOL = 1e-6  # rad and N m a 1 kHz sample may leave the joint and torque limits by
 EXCHANGE_ROUNDS = 8  # Ipopt runs at the most
 
 
 def _worst_times(t: np.ndarray, slack: np.ndarray, tol: float) -> np.ndarray:
-    """The worst time of each stretch of t where slack < -tol (local minima of the slack)."""
+    """The worst times of each stretch of t where slack < -tol (its local minima)."""
     left = np.concatenate([[np.inf], slack[:-1]])
     right = np.concatenate([slack[1:], [np.inf]])
     return t[(slack < -tol) & (slack <= left) & (slack <= right)]
@@ -76,22 +76,21 @@ def solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild: Callable[[Samp
     """Solve ``nlp`` from ``x0`` with the problem's Ipopt settings, check the tube and the limits on
     the 1 kHz grid t, add the violated times (``rebuild(extra)`` is the NLP with them) and resume
     from the point, until the grid holds (module doc)."""
-    solved = Solved(nlp, _run_ipopt(problem, nlp, x0, verbose))
-    while True:
-        nlp, run = solved.nlp, solved.run
-        entry: dict[str, Any] = {"iterations": run.iterations, "time_s": run.time_s, "status": run.status,
-                                 "grid_points": int(len(nlp.grid_t)),
-                                 "torque_points": int(len(nlp.quad_t) + len(nlp.extra.torque))}
-        solved.rounds.append(entry)
-        solved.convergence.append(convergence_entry(nlp.method, len(solved.rounds), run.history))
-        if not run.success or len(solved.rounds) >= EXCHANGE_ROUNDS:
-            return solved
+    def record(nlp: MinTorqueNLP, run: IpoptResult) -> dict[str, Any]:
+        return {"iterations": run.iterations, "time_s": run.time_s, "status": run.status,
+                "grid_points": int(len(nlp.grid_t)), "torque_points": int(len(nlp.quad_t) + len(nlp.extra.torque)),
+                "history": run.history}
+
+    def check(nlp: MinTorqueNLP, run: IpoptResult) -> tuple[Samples | None, dict[str, float]]:
         P = nlp.control_points(run.x)
         motion = sampled_motion(nlp.layer, robot, nlp.path.spline, P, t, nlp.objective)
         sigma2 = nlp.layer.variance(nlp.path.spline.evaluate(P, t))[0] \
             if isinstance(nlp.layer, GPLayer) and nlp.tube is not None else None
-        add, entry["violation_1khz"] = violated_times(nlp, motion, sigma2, t)
-        if not add:
-            return solved
-        solved.nlp = rebuild(nlp.extra.merged(add))
-        solved.run = _run_ipopt(problem, solved.nlp, run.x, verbose)
+        add, worst = violated_times(nlp, motion, sigma2, t)
+        return (add if add else None), worst
+
+    kind = Exchange(solve=lambda nlp, x: _run_ipopt(problem, nlp, x, verbose), record=record, check=check,
+                    grow=lambda nlp, add: rebuild(nlp.extra.merged(add)), resume=lambda old, new, run: run.x)
+    nlp, run, rounds = exchange_rounds(nlp, x0, kind, EXCHANGE_ROUNDS)
+    convergence = [convergence_entry(nlp.method, k + 1, r.pop("history")) for k, r in enumerate(rounds)]
+    return Solved(nlp, run, rounds, convergence)

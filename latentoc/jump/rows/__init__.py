@@ -3,9 +3,12 @@ a Function of the joint motion (y, yd, ydd) and the node's other inputs r, never
 
 * :mod:`.contact` - a contact node or sample: base rows = sum J^T f, torques, foot placement, ZMP, COM;
 * :mod:`.flight` - the flight's inverse dynamics (at any time), foot clearance and pitch rate;
-* :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact.
+* :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact;
+* :mod:`.tube` - the tube (Eq. 29), from the GP layer alone.
 
-Each module names its blocks' inputs r (sizes, in order) and builds them for latent dimension d.
+Each module names its blocks' inputs r (sizes, in order), builds them for latent dimension d and
+wires its families (:mod:`latentoc.jump.wiring`): their nodes, inputs and rows; :func:`families`
+lists them in the NLP's order.
 """
 from __future__ import annotations
 
@@ -14,7 +17,7 @@ import casadi as ca
 from ...nlp.blocks import RobotBlock, block_inputs
 from ..robot import JumpRobot
 
-__all__ = ["inputs", "row_blocks"]
+__all__ = ["inputs", "row_blocks", "families"]
 
 
 def inputs(robot: JumpRobot, spec: dict[str, int]) -> tuple[tuple[ca.SX, ca.SX, ca.SX, ca.SX], dict[str, ca.SX]]:
@@ -34,3 +37,11 @@ def row_blocks(robot: JumpRobot, d: int) -> dict[str, RobotBlock]:
     return {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
             "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
             "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
+
+
+def families() -> tuple:
+    """The wiring functions of the NLP's families, in the order of its rows."""
+    from . import contact, flight, transitions, tube
+
+    return (contact.wire_nodes, contact.wire_samples, transitions.wire_takeoff, flight.wire_pitch,
+            flight.wire_samples, flight.wire_clearance, transitions.wire_touchdown, tube.wire)

@@ -10,10 +10,13 @@ normal force, smooth as fz -> 0) and the projected COM in it.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 from ...nlp.blocks import RobotBlock
 from ..contact import EDGES, TOE_PAD, point_forces, point_generalized_force, toe_wrench
 from ..robot import SAGITTAL_ROWS, JumpRobot, galilean
+from ..selection import POLYGON_EDGES
+from ..wiring import Rows, Wiring
 from ...support_polygon import symbolic_rows
 from . import inputs
 
@@ -60,3 +63,56 @@ def block(robot: JumpRobot, d: int) -> RobotBlock:
         "com_polygon": symbolic_rows(heel, toe)(robot.sym.com(q)[:2] + ca.vertcat(u["b"][0], 0)),
     }
     return RobotBlock.from_parts("jump_contact", (y, yd, ydd, r), parts, d)
+
+
+def _rows_at(rows: Rows, w: Wiring, k: int, t: float, torque: np.ndarray, polygon: np.ndarray) -> None:
+    """A contact node's or sample's rows: base rows and centre of pressure always; the chosen torque
+    rows; the chosen ZMP edges in the landing and COM edges once it has settled."""
+    robot, ph, s = w.robot, w.phases, w.settings
+    kept = robot.unmirrored
+    at = np.array([t])
+    rows.add(k, "dynamics")
+    rows.add(k, "cop_front")
+    rows.add(k, "cop_heel" if ph.loaded("heel", at)[0] else "cop_ball" if ph.loaded("ball", at)[0] else "cop_pad")
+    if s.torque_limits and torque.any():
+        rows.add(k, "torque", 1.0 / robot.torque_scale[kept[torque]], kept[torque])
+    if s.polygon and t >= ph.touchdown - 1e-9:
+        zmp, com = polygon[:POLYGON_EDGES], polygon[POLYGON_EDGES:]
+        if zmp.any():
+            rows.add(k, "zmp_polygon", subset=np.flatnonzero(zmp))
+        if com.any() and t >= ph.settle - 1e-9:
+            rows.add(k, "com_polygon", subset=np.flatnonzero(com))
+
+
+def wire_nodes(w: Wiring) -> None:
+    """The contact nodes: their own edge weights, the toe tip's ground point (the stance's at 0, the
+    landing's the jump distance x_L), the feet's placement and the chosen rows."""
+    ts, tl = w.grid["stance"], w.grid["land"]
+    tc, var, sel = np.concatenate([ts, tl]), w.variables, w.selection
+    ni = w.inputs(len(tc))
+    w.latent(ni, tc)
+    w.base(ni, tc)
+    ni.variables(np.concatenate([-np.ones(len(ts), np.int64), np.full(len(tl), var.index("x_L")[0])])[:, None])
+    ni.variables(var.index("lam"))
+    rows = Rows(w.blocks["contact"])
+    for k, t in enumerate(tc):
+        _rows_at(rows, w, k, t, sel.node_torque[k], sel.node_polygon[k])
+        for part in ("ball_height", "toe_position", "heel_height"):
+            rows.add(k, part)
+    w.add("contact", ni, rows, tc)
+
+
+def wire_samples(w: Wiring) -> None:
+    """The contact samples: the same block with their own edge weights, no foot placement."""
+    sel = w.selection
+    if not len(sel.contact):
+        return
+    ni = w.inputs(len(sel.contact))
+    w.latent(ni, sel.contact)
+    w.base(ni, sel.contact)
+    ni.constant(np.zeros((len(sel.contact), 1)))  # the toe tip's ground point: no placement rows here
+    ni.variables(w.variables.index("lam_sample"))
+    rows = Rows(w.blocks["contact"])
+    for k, t in enumerate(sel.contact):
+        _rows_at(rows, w, k, t, sel.contact_torque[k], sel.contact_polygon[k])
+    w.add("contact_sample", ni, rows, sel.contact)

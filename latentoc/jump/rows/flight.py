@@ -12,10 +12,15 @@ pitch and the takeoff COM state to place the feet.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
+import scipy.sparse as sp
 
+from ...nlp.assemble import Family
 from ...nlp.blocks import RobotBlock
-from ..flight import GRAVITY, flight_functions
+from ...nlp.evaluators import BlockEvaluator
+from ..flight import GRAVITY, cumulative_trapezoid_matrix, flight_functions
 from ..robot import SAGITTAL_ROWS, JumpRobot
+from ..wiring import Rows, Wiring
 from . import inputs
 
 DYNAMICS_INPUTS = {"pd": 1, "acc": 3}  # pitch rate; base accelerations (x, z, pitch)
@@ -61,3 +66,70 @@ def pitch_rate_block(robot: JumpRobot, d: int) -> RobotBlock:
     (y, yd, ydd, r), u = inputs(robot, PITCH_RATE_INPUTS)
     pd, _ = flight_functions(robot.sym, robot.smap)["pitch_rate"](y, yd, ydd, u["L"])
     return RobotBlock.from_parts("jump_pitch_rate", (y, yd, ydd, r), {"pitch_rate": pd}, d)
+
+
+def wire_pitch(w: Wiring) -> None:
+    """The flight nodes' pitch: p_k - p_0 = int_0^tau_k pd, the pitch rate of the conserved momentum
+    integrated by the trapezoid rule on ``flight_substeps`` steps per node interval."""
+    tf, var, ph = w.grid["flight"], w.variables, w.phases
+    nF, nsub = len(tf), max(1, int(w.settings.flight_substeps))
+    tau = pitch_grid(tf - ph.takeoff, nsub)
+    ni = w.inputs(len(tau))
+    w.latent(ni, ph.takeoff + tau)
+    ni.variables(np.full((len(tau), 1), var.index("L_to")[0]))
+    A = cumulative_trapezoid_matrix(tau)[:, ::nsub].T[1:]  # (nF - 1) x fine
+    pf = var.index("pitch_flight")
+    L = sp.csr_matrix((np.concatenate([np.ones(nF - 1), -np.ones(nF - 1)]),
+                       (np.concatenate([np.arange(nF - 1)] * 2), np.concatenate([pf[1:], np.full(nF - 1, pf[0])]))),
+                      shape=(nF - 1, w.n_w))
+    S, s0 = ni.build()
+    w.families.append(Family("pitch_integration", BlockEvaluator(w.blocks["pitch_rate"], w.layer), S, s0,
+                             Cg=sp.csr_matrix(-A), L=L))
+    w.record(["pitch_integration"] * (nF - 1), tf[1:], [0] * (nF - 1))
+
+
+def pitch_grid(tau_nodes: np.ndarray, substeps: int) -> np.ndarray:
+    """Flight times (from takeoff) of the pitch integration: ``substeps`` steps per node interval."""
+    return np.linspace(0.0, tau_nodes[-1], (len(tau_nodes) - 1) * substeps + 1)
+
+
+def wire_samples(w: Wiring) -> None:
+    """The flight samples: free fall with the sample's pitch rate and base accelerations, the pitch
+    rate tied to the momentum (pd(y, yd, L) - pd_sample = 0), the chosen torque rows."""
+    sel, var, robot = w.selection, w.variables, w.robot
+    if not len(sel.flight):
+        return
+    tfs, fs, kept = sel.flight, var.index("flight_sample"), robot.unmirrored
+    ni = w.inputs(len(tfs))
+    w.latent(ni, tfs)
+    ni.variables(fs)
+    rows = Rows(w.blocks["flight_dynamics"])
+    for k in range(len(tfs)):
+        rows.add(k, "flight_base")
+        if w.settings.torque_limits and sel.flight_torque[k].any():
+            m = sel.flight_torque[k]
+            rows.add(k, "torque", 1.0 / robot.torque_scale[kept[m]], kept[m])
+    w.add("flight", ni, rows, tfs)
+    ni = w.inputs(len(tfs))
+    w.latent(ni, tfs)
+    ni.variables(np.full((len(tfs), 1), var.index("L_to")[0]))
+    rows = Rows(w.blocks["pitch_rate"])
+    for k in range(len(tfs)):
+        rows.add(k, "pitch_rate")
+    tie = sp.csr_matrix((-np.ones(len(tfs)), (np.arange(len(tfs)), fs[:, 0])), shape=(len(tfs), w.n_w))
+    w.add("flight_pitch", ni, rows, tfs, L=tie)
+
+
+def wire_clearance(w: Wiring) -> None:
+    """The feet above the ground at the interior flight nodes."""
+    tf, var, ph = w.grid["flight"], w.variables, w.phases
+    nF, pf = len(tf), var.index("pitch_flight")
+    ni = w.inputs(nF - 2)
+    w.latent(ni, tf[1:-1])
+    ni.variables(np.column_stack([pf[1:-1], np.tile(np.concatenate([var.index("L_to"), var.index("c_to"),
+                                                                     var.index("cd_to")]), (nF - 2, 1))]))
+    ni.constant((tf[1:-1] - ph.takeoff)[:, None])
+    rows = Rows(w.blocks["flight_clearance"])
+    for k in range(nF - 2):
+        rows.add(k, "flight_clearance")
+    w.add("flight_clearance", ni, rows, tf[1:-1])

@@ -11,12 +11,14 @@ flight's base pose meets the landing's, and the perfectly inelastic impact
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 from ...nlp.blocks import RobotBlock
 from ..base import base_function
 from ..contact import EDGES, point_forces, point_generalized_force
 from ..flight import flight_functions
 from ..robot import SAGITTAL_ROWS, JumpRobot
+from ..wiring import Rows, Wiring
 from . import inputs
 from .flight import ballistic_com, flight_base
 
@@ -47,3 +49,33 @@ def touchdown_block(robot: JumpRobot, d: int) -> RobotBlock:
     impact = Mbb @ (v_plus - v_minus) - gen[:6]
     return RobotBlock.from_parts("jump_touchdown", (y, yd, ydd, r),
                                  {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W}, d, hot=False)
+
+
+def wire_takeoff(w: Wiring) -> None:
+    """The takeoff: the flight's state variables are the stance's at takeoff."""
+    var, t = w.variables, np.array([w.phases.takeoff])
+    ni = w.inputs(1)
+    w.latent(ni, t)
+    w.base(ni, t, orders=2)
+    ni.variables(np.concatenate([var.index("c_to"), var.index("cd_to"), var.index("L_to"),
+                                 var.index("pitch_flight")[:1]])[None, :])
+    rows = Rows(w.blocks["takeoff"])
+    rows.add(0, "takeoff")
+    w.add("takeoff", ni, rows, t)
+
+
+def wire_touchdown(w: Wiring) -> None:
+    """The touchdown: the flight's base meets the landing's; the inelastic impact."""
+    var, ph = w.variables, w.phases
+    t = np.array([ph.touchdown])
+    ni = w.inputs(1)
+    w.latent(ni, t)
+    w.base(ni, t, orders=2)
+    ni.variables(np.concatenate([var.index("pitch_flight")[-1:], var.index("L_to"), var.index("c_to"),
+                                 var.index("cd_to")])[None, :])
+    ni.constant([[ph.touchdown - ph.takeoff]])
+    ni.variables(var.index("lam_impact")[None, :])
+    rows = Rows(w.blocks["touchdown"])
+    rows.add(0, "touchdown_position")
+    rows.add(0, "impact")
+    w.add("touchdown", ni, rows, t)

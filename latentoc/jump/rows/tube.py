@@ -1,0 +1,24 @@
+"""The tube sigma^2 <= delta (Eq. 29) at the selection's times: the GP layer's alone, no robot block.
+
+The rows are relative (sigma^2 / delta <= 1) so that Ipopt's tolerances are relative to delta.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...nlp.assemble import Family
+from ...nlp.evaluators import VarianceEvaluator
+from ..wiring import Wiring
+
+
+def wire(w: Wiring) -> None:
+    t = np.asarray(w.selection.tube, float)
+    if not len(t):
+        return
+    ni = w.inputs(len(t))
+    w.latent(ni, t, orders=1)
+    S, s0 = ni.build()
+    w.families.append(Family("tube", VarianceEvaluator(w.layer), S, s0,
+                             Cg=sp.identity(len(t), format="csr") / w.settings.tube))
+    w.record(["tube"] * len(t), t, [0] * len(t))
