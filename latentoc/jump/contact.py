@@ -25,6 +25,7 @@ push only when they are on the ground, by the training motion's contact schedule
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -124,7 +125,7 @@ def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -
     frame (LOCAL_WORLD_ALIGNED), as in the training estimate (:mod:`.torque_limits`).
     """
     P = points_function(sym, geom)(q)
-    gen = 0
+    gen: Any = 0
     for side in "lr":
         for k, point in enumerate(POINTS):
             name = side + FRAMES[point][1:]

@@ -50,7 +50,7 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, nlp: JumpNLP, w
     b_to = [sps.evaluate(parts["base_stance"], t_to, k).ravel() for k in range(2)]
     tau_f = np.concatenate([[0.0], t[fl] - ph.takeoff])
     Yf = [np.vstack([a[:1], b[fl]]).T for a, b in ((m_to.y, m.y), (m_to.yd, m.yd), (m_to.ydd, m.ydd))]
-    bb = ballistic_base(flight_functions(robot.sym, robot.smap), *Yf, tau_f, b_to[0], b_to[1], m_to.y.T, m_to.yd.T)
+    bb = ballistic_base(flight_functions(robot.sym, robot.smap), Yf[0], Yf[1], Yf[2], tau_f, b_to[0], b_to[1], m_to.y.T, m_to.yd.T)
     for k in range(3):
         B[k][fl] = bb[k].T[1:]
     q7, v6, a6 = base_to_freeflyer(*B)

@@ -54,12 +54,13 @@ class Phases:
         if point in ("toe", "pad") or self.heel_off is None:
             return np.ones(t.shape, bool)
         off, strike = {"heel": (self.heel_off, self.heel_strike), "ball": (self.ball_off, self.ball_strike)}[point]
+        assert off is not None and strike is not None  # the schedule is whole or absent
         return (t <= off + 1e-9) | (t >= strike - 1e-9)
 
     def switch_samples(self, eps: float = 5e-4) -> np.ndarray:
         """Times just inside each unloaded interval of the contact schedule: ``eps`` after the heel
         and ball leave the ground and before they strike it (empty without a schedule)."""
-        if self.heel_off is None:
+        if self.heel_off is None or self.ball_off is None or self.ball_strike is None or self.heel_strike is None:
             return np.zeros(0)
         t = np.array([self.heel_off + eps, self.ball_off + eps, self.ball_strike - eps, self.heel_strike - eps])
         inside = ((t > 0) & (t < self.takeoff)) | ((t > self.touchdown) & (t < self.duration))

@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..dynamics import SymbolicModel
+from ..mocap.symmetry import SymmetryMap
 from ..errors import ProblemError, SolveError
 from ..gpdm import GPDM, GPDMSettings, cached_gpdm
 from ..latent.gp_layer import GPLayer
@@ -47,7 +48,7 @@ class JumpSetup:
     """Everything the NLP needs from the training data."""
 
     model: pin.Model
-    smap: object
+    smap: SymmetryMap
     training: JumpTraining
     gpdm: GPDM
     phases: Phases

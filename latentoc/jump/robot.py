@@ -13,6 +13,7 @@ import casadi as ca
 import numpy as np
 
 from ..dynamics import SymbolicModel
+from ..mocap.symmetry import SymmetryMap
 from .base import base_function
 from .contact import POINTS, FootGeometry, joint_embedding, points_function
 from .torque_limits import TrainingDynamics
@@ -27,7 +28,7 @@ class JumpRobot:
     """The symmetric humanoid as the row families see it."""
 
     sym: SymbolicModel
-    smap: object
+    smap: SymmetryMap
     geom: FootGeometry
     limits: TrainingDynamics
     mu: float

@@ -109,7 +109,7 @@ class _Solve:
         self.lap("check_s")
         return traj, sr
 
-    def ipopt(self, nlp: JumpNLP, x: np.ndarray, warm: dict | None, what: str) -> ipopt.IpoptResult:
+    def run_ipopt(self, nlp: JumpNLP, x: np.ndarray, warm: dict | None, what: str) -> ipopt.IpoptResult:
         run = ipopt.solve(nlp.nlp, x, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, self.opts, warm=warm,
                           desc=f"broad jump, delta {self.s.tube:g}: {what}")
         self.lap("solve_s")
@@ -134,7 +134,7 @@ class _Solve:
                                        seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
         nlp1 = self.build("feasibility", first)
         x1, _ = carried_point(full, nlp1, x)
-        run1 = self.ipopt(nlp1, x1, None, "phase 1 (feasible)")
+        run1 = self.run_ipopt(nlp1, x1, None, "phase 1 (feasible)")
         return nlp1, run1.x, run1
 
     def phase2(self, nlp_start: JumpNLP, x_start: np.ndarray, warm: dict | None
@@ -168,7 +168,7 @@ class _Solve:
 
         def solve(nlp: JumpNLP, start: dict) -> ipopt.IpoptResult:
             warm_start = start if "lam_g0" in start else None
-            return self.ipopt(nlp, start["x0"], warm_start, "phase 2 (distance)")
+            return self.run_ipopt(nlp, start["x0"], warm_start, "phase 2 (distance)")
 
         kind = Exchange(solve=solve, record=lambda nlp, run: {**_run_summary(run, nlp), "history": run.history}, check=check,
                         grow=lambda nlp, more: self.build("distance", more), resume=resume)

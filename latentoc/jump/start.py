@@ -44,7 +44,7 @@ def initial_point(robot: JumpRobot, layer: GPLayer, nlp: JumpNLP, P: np.ndarray,
     c, cd, L = (np.asarray(v).ravel() for v in fns["momentum"](y_to, yd_to, b_to, bd_to))
     tau_fine = nlp.tau_fine
     Yf = _joint_motion(layer, sp_, P, takeoff + tau_fine)
-    bb = ballistic_base(fns, *Yf, tau_fine, b_to, bd_to, y_to, yd_to)
+    bb = ballistic_base(fns, Yf[0], Yf[1], Yf[2], tau_fine, b_to, bd_to, y_to, yd_to)
     nC = var.shapes["lam"][0]
     x0 = var.pack({"P": P[1:-1], "base_stance": base_s, "base_land": base_l, "x_L": x_L,
                    "lam": np.full((nC, EDGES), 1.0 / (2 * EDGES)), "lam_impact": np.full(EDGES, 0.5), "c_to": c, "cd_to": cd,

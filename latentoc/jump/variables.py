@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -57,7 +58,7 @@ class JumpVariables:
         w = np.asarray(w, float).ravel()
         return {name: w[s].reshape(self.shapes[name]) for name, s in self.slices.items()}
 
-    def pack(self, values: dict[str, np.ndarray]) -> np.ndarray:
+    def pack(self, values: dict[str, Any]) -> np.ndarray:
         w = np.zeros(self.n)
         for name, v in values.items():
             w[self.slices[name]] = np.asarray(v, float).reshape(self.shapes[name]).ravel()

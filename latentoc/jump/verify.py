@@ -93,10 +93,11 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         out["toe_xz"][i] = d.oMf[ids[TOE]].translation[[0, 2]]
+        gen: np.ndarray
         if not contact[i]:
             gen = np.zeros(model.nv)
-        elif with_points:  # each point force on its own body (heel, ball: foot; toe: toes)
-            gen = sum(Jp[k].T @ np.array([points[i, k, 0], 0.0, points[i, k, 1]]) for k in range(len(Jp)))
+        elif with_points and points is not None:  # each point force on its own body (heel, ball: foot; toe: toes)
+            gen = np.sum([Jp[k].T @ np.array([points[i, k, 0], 0.0, points[i, k, 1]]) for k in range(len(Jp))], axis=0)
             cone = mu * points[i, :, 1] - np.abs(points[i, :, 0])  # of the loaded points (the others carry 0)
             out["point_cone"][i] = float(np.min(cone[loaded[i]] if loaded is not None and loaded[i].any() else cone))
         else:

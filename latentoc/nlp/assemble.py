@@ -22,6 +22,7 @@ node k touches, and scattered into fixed compressed-column patterns. Small terms
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 import casadi as ca
 import numpy as np
@@ -30,13 +31,26 @@ import scipy.sparse as sp
 __all__ = ["Family", "SparseNLP"]
 
 
+class LocalEvaluator(Protocol):
+    """What a family evaluates at its K nodes (:mod:`.evaluators`)."""
+
+    n_in: int
+    n_out: int
+
+    def values(self, s: np.ndarray) -> np.ndarray: ...
+
+    def jacobian(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def hessian(self, s: np.ndarray, lam: np.ndarray) -> np.ndarray: ...
+
+
 @dataclass
 class Family:
     """One row family: an evaluator at K nodes, its affine local inputs, and how its outputs
     enter the constraints (``Cg``, ``L``, ``c``) and the objective (``cf``)."""
 
     name: str
-    evaluator: object
+    evaluator: LocalEvaluator | None
     S: sp.spmatrix  # (K n_in) x n_w
     s0: np.ndarray  # K n_in
     Cg: sp.spmatrix | None = None  # m x (K n_out); None: no constraint rows
@@ -66,14 +80,17 @@ class Family:
         return self.S.shape[0] // max(self.evaluator.n_in, 1) if self.evaluator is not None else 0
 
     def local_inputs(self, w: np.ndarray) -> np.ndarray:
-        return (self.S @ w + self.s0).reshape(self.K, self.evaluator.n_in)
+        n_in = self.evaluator.n_in if self.evaluator is not None else 0
+        return (self.S @ w + self.s0).reshape(self.K, n_in)
 
 
 class _Plan:
     """Precomputed dense node blocks of S and the scatter positions of one family."""
 
     def __init__(self, fam: Family, n_w: int):
-        ev = fam.evaluator
+        if fam.evaluator is None:
+            raise ValueError(f"family {fam.name!r} has no evaluator to plan")
+        ev = self.ev = fam.evaluator
         self.fam = fam
         n_in, K = ev.n_in, fam.K
         S = sp.csr_matrix(fam.S)
@@ -121,7 +138,8 @@ class SparseNLP:
     def __init__(self, n_w: int, families: list[Family], objective_terms: ca.Function | None = None):
         self.n_w = int(n_w)
         self.families = [f for f in families if f.n_rows or f.cf is not None]
-        self.row_offset, off = {}, 0
+        self.row_offset: dict[str, int] = {}
+        off = 0
         for f in self.families:
             if f.name in self.row_offset:
                 raise ValueError(f"two row families are named {f.name!r}")
@@ -132,7 +150,7 @@ class SparseNLP:
         self._objective_terms(objective_terms)
         self._jacobian_pattern()
         self._hessian_pattern()
-        self._cache: dict = {}
+        self._cache: dict[str, Any] = {}
 
     # ------------------------------------------------------------ patterns
     def _objective_terms(self, terms: ca.Function | None) -> None:
@@ -144,7 +162,8 @@ class SparseNLP:
         self._terms_hess_sp = H.sparsity()
 
     def _jacobian_pattern(self) -> None:
-        rows, cols = [], []
+        rows: list[np.ndarray] = []
+        cols: list[np.ndarray] = []
         for f, plan in zip(self.families, self.plans):
             r0 = self.row_offset[f.name]
             if plan is not None and len(plan.C_rows):
@@ -156,11 +175,12 @@ class SparseNLP:
                 L = sp.coo_matrix(f.L)
                 rows.append(r0 + L.row)
                 cols.append(L.col)
-        rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
-        cols = np.concatenate(cols) if cols else np.zeros(0, np.int64)
-        self.jac_sparsity, keys = _pattern(rows, cols, self.m, self.n_w)
+        all_rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
+        all_cols = np.concatenate(cols) if cols else np.zeros(0, np.int64)
+        self.jac_sparsity, keys = _pattern(all_rows, all_cols, self.m, self.n_w)
         self._jac_nnz = len(keys)
-        self._jac_dest, self._lin_dest = [], []
+        self._jac_dest: list[np.ndarray | None] = []
+        self._lin_dest: list[tuple[np.ndarray, np.ndarray] | None] = []
         for f, plan in zip(self.families, self.plans):
             r0 = self.row_offset[f.name]
             dest = None
@@ -176,7 +196,8 @@ class SparseNLP:
             self._lin_dest.append(lin)
 
     def _hessian_pattern(self) -> None:
-        rows, cols = [], []
+        rows: list[np.ndarray] = []
+        cols: list[np.ndarray] = []
         for plan in self.plans:
             if plan is None:
                 continue
@@ -190,7 +211,7 @@ class SparseNLP:
         cols.append(tc)
         self.hess_sparsity, keys = _pattern(np.concatenate(rows), np.concatenate(cols), self.n_w, self.n_w)
         self._hess_nnz = len(keys)
-        self._hess_dest = []
+        self._hess_dest: list[np.ndarray | None] = []
         for plan in self.plans:
             if plan is None:
                 self._hess_dest.append(None)
@@ -211,7 +232,7 @@ class SparseNLP:
     def _jacobians(self, w: np.ndarray):
         self._inputs(w)
         if "jac" not in self._cache:
-            self._cache["jac"] = [None if p is None else p.fam.evaluator.jacobian(s)
+            self._cache["jac"] = [None if p is None else p.ev.jacobian(s)
                                   for p, s in zip(self.plans, self._cache["s"])]
         return self._cache["jac"]
 
@@ -220,7 +241,7 @@ class SparseNLP:
         if "jac" in self._cache:
             return [None if j is None else j[0] for j in self._cache["jac"]]
         if "F" not in self._cache:
-            self._cache["F"] = [None if p is None else p.fam.evaluator.values(s)
+            self._cache["F"] = [None if p is None else p.ev.values(s)
                                 for p, s in zip(self.plans, self._cache["s"])]
         return self._cache["F"]
 
@@ -265,7 +286,7 @@ class SparseNLP:
         w = np.asarray(w, float).ravel()
         vals = np.zeros(self._jac_nnz + 1)
         for plan, jac, dest, lin in zip(self.plans, self._jacobians(w), self._jac_dest, self._lin_dest):
-            if dest is not None:
+            if dest is not None and plan is not None:
                 Jw = np.matmul(jac[1], plan.Sd)  # K x n_out x n_c
                 v = plan.C_val[:, None] * Jw[plan.C_node, plan.C_out, :]
                 vals += np.bincount(dest.ravel(), v.ravel(), minlength=self._jac_nnz + 1)
@@ -282,9 +303,9 @@ class SparseNLP:
         if sigma != 0.0:
             vals[self._terms_dest] += sigma * np.asarray(self._terms_hess(w).nonzeros())
         for f, plan, s, dest in zip(self.families, self.plans, s_all, self._hess_dest):
-            if plan is None:
+            if plan is None or s is None or dest is None:
                 continue
-            m = np.zeros(plan.Sd.shape[0] * f.evaluator.n_out)
+            m = np.zeros(plan.Sd.shape[0] * plan.ev.n_out)
             if plan.CgT is not None:
                 r0 = self.row_offset[f.name]
                 m += plan.CgT @ lam[r0:r0 + f.n_rows]
@@ -292,7 +313,7 @@ class SparseNLP:
                 m += sigma * plan.cf.ravel()
             if not np.any(m):
                 continue
-            Hs = f.evaluator.hessian(s, m.reshape(-1, f.evaluator.n_out))
+            Hs = plan.ev.hessian(s, m.reshape(-1, plan.ev.n_out))
             Hw = np.matmul(np.swapaxes(plan.Sd, 1, 2), np.matmul(Hs, plan.Sd))
             vals += np.bincount(dest.ravel(), Hw.ravel(), minlength=self._hess_nnz + 1)
         return vals[:-1]

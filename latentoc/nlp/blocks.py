@@ -139,12 +139,12 @@ class MappedCall:
         for i, a in enumerate(self._args):
             if f.sparsity_in(i).nnz() != f.numel_in(i):
                 raise ValueError(f"{f.name()}: input {i} is not dense")
-            self._buf.set_arg(i, memoryview(a))
+            self._buf.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]  # CasADi's stub: (i, ptr, size)
         self._res, self._scatter = [], []
         for i in range(f.n_out()):
             sp = f.sparsity_out(i)
             nz = np.zeros(sp.nnz())
-            self._buf.set_res(i, memoryview(nz))
+            self._buf.set_res(i, memoryview(nz))  # type: ignore[call-arg, arg-type]
             rows, cols = np.array(sp.get_triplet()[0], np.int64), np.array(sp.get_triplet()[1], np.int64)
             dense = sp.nnz() == sp.numel()
             self._res.append(nz)
@@ -166,7 +166,7 @@ class MappedCall:
 
 
 def _index_file(block: RobotBlock) -> Path:
-    key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, ca.__version__,
+    key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, jit.CASADI_VERSION,
                      str(jit.compiler()), str(block.hot), *jit.JIT_FLAGS, *jit.ONCE_FLAGS, str(jit.LARGE_FUNCTION)])
     return jit.cache_dir() / f"rb_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
 
@@ -196,7 +196,8 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
         todo.append(b)
     if not todo:
         return blocks
-    fns, futures = {}, {}
+    fns: dict[str, dict[str, ca.Function]] = {}
+    futures: dict[str, list] = {}
     with jit.Compiler() as cc:
         for b in bar(todo, desc="building the robot blocks' derivatives", unit="block"):
             fns[b.name] = b.derivative_functions()

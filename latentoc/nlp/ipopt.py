@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -218,7 +218,7 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
     w = ca.MX.sym("w", n)
     p = ca.MX.sym("p", 0)
     problem = {"x": w, "f": cbs["f"](w, p), "g": cbs["g"](w, p)}
-    opts = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "calc_lam_p": False,
+    opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False, "error_on_fail": False, "calc_lam_p": False,
             "iteration_callback": progress, **{k: cbs[k] for k in ("grad_f", "jac_g", "hess_lag") if k in cbs}}
     solver = ca.nlpsol("latentoc_ipopt", "ipopt", problem, opts)
     args = {"x0": x0, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}

@@ -22,6 +22,8 @@ from ..errors import LatentocError
 from ..paths import cache_dir
 from ..progress import bar
 
+CASADI_VERSION: str = getattr(ca, "__version__")  # a key of the cached libraries
+
 __all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "threads", "node_map"]
 
 JIT_FLAGS = ("-O1",)  # code evaluated at every Ipopt iteration over many nodes: half the time of -O0
@@ -71,7 +73,7 @@ def node_map(f: ca.Function, K: int, instructions: int = 0) -> ca.Function:
 
 
 def library_path(source: str, flags: tuple[str, ...] = JIT_FLAGS) -> Path:
-    key = hashlib.sha256("\0".join([source, str(compiler()), *flags, ca.__version__]).encode()).hexdigest()[:24]
+    key = hashlib.sha256("\0".join([source, str(compiler()), *flags, CASADI_VERSION]).encode()).hexdigest()[:24]
     return cache_dir() / f"lc_{key}.so"
 
 
@@ -119,6 +121,7 @@ class Compiler:
             with tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
                 c_file, so_file = Path(tmp) / f"{lib.stem}.c", Path(tmp) / lib.name
                 c_file.write_text(source)
+                assert self.cc is not None  # submit() compiles nothing without one
                 subprocess.run([self.cc, *flags, "-shared", "-fPIC", "-o", str(so_file), str(c_file), "-lm"],
                                check=True, capture_output=True, text=True)
                 os.replace(so_file, lib)  # atomic: readers see no library or a complete one

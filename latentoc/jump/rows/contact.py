@@ -37,7 +37,8 @@ def homogeneous_polygon_rows(heel, toe, p_scaled, s):
 def block(robot: JumpRobot, d: int) -> RobotBlock:
     (y, yd, ydd, r), u = inputs(robot, INPUTS)
     W = robot.weight
-    q, v, a = robot.configuration(*galilean(u["b"], u["bd"]), u["bdd"], y, yd, ydd)
+    b0, bd0 = galilean(u["b"], u["bd"])
+    q, v, a = robot.configuration(b0, bd0, u["bdd"], y, yd, ydd)
     tau = robot.sym.rnea(q, v, a)
     lam = u["lam"]
     gen = point_generalized_force(robot.sym, robot.geom, q, point_forces(lam * W, robot.mu))

@@ -73,7 +73,7 @@ def wire_touchdown(w: Wiring) -> None:
     w.base(ni, t, orders=2)
     ni.variables(np.concatenate([var.index("pitch_flight")[-1:], var.index("L_to"), var.index("c_to"),
                                  var.index("cd_to")])[None, :])
-    ni.constant([[ph.touchdown - ph.takeoff]])
+    ni.constant(np.array([[ph.touchdown - ph.takeoff]]))
     ni.variables(var.index("lam_impact")[None, :])
     rows = Rows(w.blocks["touchdown"])
     rows.add(0, "touchdown_position")
