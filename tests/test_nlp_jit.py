@@ -53,3 +53,36 @@ def test_ipopt_loads_its_blas_on_one_thread():
         out = subprocess.run([sys.executable, "-c", code], env={**env, "OPENBLAS_NUM_THREADS": "2"},
                              capture_output=True, text=True, check=True).stdout
         assert out.split() == ["1", "2"]
+
+
+def test_a_damaged_library_is_compiled_again_and_an_index_never_points_outside(tmp_path, monkeypatch):
+    """A truncated cached library (loading it would crash the process) is found by its checksum,
+    removed with a one-line warning and compiled again, with the same values; an index whose
+    libraries are paths outside the cache (an edited file) is not followed but compiled anew."""
+    import json
+
+    from latentoc.nlp import jit
+
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.delenv("LATENTOC_JIT", raising=False)
+    if jit.compiler() is None:
+        pytest.skip("no C compiler")
+    x = np.array([0.3, -0.2])
+    want = np.asarray(_block("lc_damaged").derivative_functions()["rows"](x, x, x, [0.5]))
+    compile_blocks([_block("lc_damaged")])
+    libs = sorted(tmp_path.glob("lc_*.so"))
+    assert len(libs) == 3 and all((lib.parent / (lib.name + ".sha256")).exists() for lib in libs)
+    libs[0].write_bytes(libs[0].read_bytes()[:100])  # truncated, as by a full disk or a killed copy
+    with pytest.warns(UserWarning, match="damaged or without its checksum; compiling it again"):
+        b = compile_blocks([_block("lc_damaged")])[0]
+    assert all(f.is_a("External") for f in b.functions.values())
+    np.testing.assert_allclose(np.asarray(b.functions["rows"](x, x, x, [0.5])), want, rtol=1e-14)
+    index = next(tmp_path.glob("rb_*.json"))
+    entry = json.loads(index.read_text())
+    outside = tmp_path.parent / "elsewhere.so"
+    outside.write_bytes(libs[1].read_bytes())
+    entry["libraries"] = [str(outside)] * 3
+    index.write_text(json.dumps(entry))
+    b = compile_blocks([_block("lc_damaged")])[0]
+    assert all(jit.LIBRARY_NAME.fullmatch(n) for n in json.loads(index.read_text())["libraries"])
+    np.testing.assert_allclose(np.asarray(b.functions["rows"](x, x, x, [0.5])), want, rtol=1e-14)

@@ -178,20 +178,21 @@ def _load(block: RobotBlock, libs: list[str]) -> dict[str, ca.Function]:
 
 def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
     """Give each block its ``rows``, ``jac`` and ``hess`` Functions: compiled C from the disk
-    cache, else generated and compiled now (a progress bar over the libraries), else (no
+    cache (its index names the libraries, verified by :func:`jit.cached_library`), else generated
+    and compiled now (a progress bar over the libraries), else (no
     compiler, ``LATENTOC_JIT=0``) CasADi's SX Functions."""
     todo = []
     for b in blocks:
         if b.functions or not jit.enabled():  # without JIT the SX pieces are built when first used
             continue
-        try:
+        try:  # the index names its libraries; they are looked up in the cache and verified
             entry = json.loads(_index_file(b).read_text())
-            libs = entry["libraries"]
-            if len(libs) == 3 and all(Path(p).exists() for p in libs):
-                b.functions = _load(b, libs)
-                b.instructions = dict(entry.get("instructions", {}))
+            cached = [jit.cached_library(name) for name in entry["libraries"]]
+            if len(cached) == 3 and all(lib is not None for lib in cached):
+                b.functions = _load(b, [str(lib) for lib in cached])
+                b.instructions = {str(k): int(v) for k, v in dict(entry.get("instructions", {})).items()}
                 continue
-        except (OSError, ValueError, KeyError, TypeError):
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
             pass
         todo.append(b)
     if not todo:
@@ -207,14 +208,15 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
                 gen.add(f)
                 futures[b.name].append(cc.submit(f.name(), gen.dump(), jit.flags_for(f, b.hot)))
     for b in todo:
-        libs = [f.result() for f in futures[b.name]]
-        if any(lib is None for lib in libs):
+        built: list[Path | None] = [f.result() for f in futures[b.name]]
+        libs = [lib for lib in built if lib is not None]
+        if len(libs) < len(built):
             b.functions = fns[b.name]
             continue
         index = _index_file(b)
         tmp = index.with_name(f".{index.name}.{os.getpid()}")
         b.instructions = {k: f.n_instructions() for k, f in fns[b.name].items()}
-        tmp.write_text(json.dumps({"block": b.name, "libraries": [str(p) for p in libs],
+        tmp.write_text(json.dumps({"block": b.name, "libraries": [p.name for p in libs],
                                    "instructions": b.instructions}))
         os.replace(tmp, index)
         b.functions = _load(b, [str(p) for p in libs])

@@ -2,13 +2,16 @@
 
 Libraries are cached under ``$LATENTOC_CACHE`` (else ``$XDG_CACHE_HOME/latentoc/jit`` or
 ``~/.cache/latentoc/jit``) by a hash of their C source, the compiler, the flags and CasADi's
-version, and written atomically, so only the first build on a machine compiles. Without a
+version, written atomically with their SHA-256 beside them and verified before they are loaded
+(:func:`cached_library`), so only the first build on a machine compiles and a damaged file is
+compiled again. Without a
 compiler (warning) or with ``LATENTOC_JIT=0`` the Functions stay in CasADi's virtual machine.
 """
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -72,9 +75,41 @@ def node_map(f: ca.Function, K: int, instructions: int = 0) -> ca.Function:
     return f.map(K)
 
 
+LIBRARY_NAME = re.compile(r"lc_[0-9a-f]{24}\.so")  # a cached library's name: its key
+
+
 def library_path(source: str, flags: tuple[str, ...] = JIT_FLAGS) -> Path:
     key = hashlib.sha256("\0".join([source, str(compiler()), *flags, CASADI_VERSION]).encode()).hexdigest()[:24]
     return cache_dir() / f"lc_{key}.so"
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _checksum_file(lib: Path) -> Path:
+    return lib.with_name(lib.name + ".sha256")
+
+
+def cached_library(name: str) -> Path | None:
+    """The cached library ``name`` (a bare name of the cache's own form, never a path) if it is
+    whole: its SHA-256 is the one recorded when it was compiled. A damaged or foreign file (a
+    truncated library would crash the process when loaded) is removed with a one-line warning,
+    so that it is compiled again."""
+    if not LIBRARY_NAME.fullmatch(str(name)):
+        return None
+    lib = cache_dir() / name
+    try:
+        if not lib.exists():
+            return None
+        if _checksum_file(lib).read_text().strip() == _digest(lib):
+            return lib
+    except OSError:
+        pass
+    warnings.warn(f"{lib}: damaged or without its checksum; compiling it again", stacklevel=2)
+    for f in (lib, _checksum_file(lib)):
+        f.unlink(missing_ok=True)
+    return None
 
 
 class Compiler:
@@ -104,7 +139,7 @@ class Compiler:
 
     def submit(self, label: str, source: str, flags: tuple[str, ...]):
         lib = library_path(source, flags)
-        if self.cc is None or lib.exists():
+        if self.cc is None or cached_library(lib.name) is not None:
             done: Future = Future()
             done.set_result(None if self.cc is None else lib)
             return done
@@ -124,7 +159,12 @@ class Compiler:
                 assert self.cc is not None  # submit() compiles nothing without one
                 subprocess.run([self.cc, *flags, "-shared", "-fPIC", "-o", str(so_file), str(c_file), "-lm"],
                                check=True, capture_output=True, text=True)
-                os.replace(so_file, lib)  # atomic: readers see no library or a complete one
+                # the checksum first, the library last, each renamed into place: a reader sees no
+                # library, or a whole one whose checksum is there
+                tmp_sum = Path(tmp) / "sha256"
+                tmp_sum.write_text(_digest(so_file))
+                os.replace(tmp_sum, _checksum_file(lib))
+                os.replace(so_file, lib)
         except (OSError, subprocess.CalledProcessError) as exc:
             detail = getattr(exc, "stderr", "") or str(exc)
             warnings.warn(f"compiling {label} failed ({detail.strip()[:200]}): evaluating without JIT", stacklevel=3)
