@@ -125,6 +125,11 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
+def _mm(x: float) -> str:
+    """A margin in mm to 0.01 mm (a margin that rounds to zero prints as 0.00, not -0.00)."""
+    return f"{round(1e3 * x, 2) + 0.0:.2f}"
+
+
 def summary(r: Result) -> str:
     """The lines ``solve`` prints about a :class:`~latentoc.results.Result`."""
     d = r.details
@@ -138,8 +143,8 @@ def summary(r: Result) -> str:
     if d.get("max_dynamics_residual") is not None:  # contact problems: the exported motion's 1 kHz checks
         lines.append(f"  1 kHz checks: base residual {d['max_dynamics_residual']:.2g} body weights, min normal force "
                      f"{d['min_normal_force']:.1f} N, friction ratio {d['max_friction_ratio']:.3f} "
-                     f"(mu {d['friction']:g}), centre-of-pressure margin {d.get('cop_margin_loaded', d['cop_margin']):.3f}"
-                     f" m, ZMP margin {d['zmp_margin']:.3f} m, COM margin {d['com_margin']:.3f} m, "
+                     f"(mu {d['friction']:g}), centre-of-pressure margin {_mm(d.get('cop_margin_loaded', d['cop_margin']))}"
+                     f" mm, ZMP margin {_mm(d['zmp_margin'])} mm, COM margin {_mm(d['com_margin'])} mm, "
                      f"torque-limit excess {d['max_torque_violation']:.2g} N m")
         if d.get("toe_slip") is not None:
             lines.append(f"  toe tip: forward travel {d['toe_displacement']:.3f} m; in contact slip "

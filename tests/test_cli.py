@@ -154,13 +154,14 @@ def test_solve_summary_reports_the_contact_checks():
     from latentoc.jump.verify import verify
 
     model, arrays = _static_arrays()
-    arrays["loaded"] = np.ones((len(arrays["t"]), 3), dtype=int)
+    arrays["loaded"] = np.ones((len(arrays["t"]), 4), dtype=int)
     checks = verify(model, arrays)
     r = make_result(tube=0.02, success=False, friction=0.4, **checks)
     text = summary(r)
     assert text.splitlines()[0] == "test (latent): Maximum_Iterations_Exceeded after 7 iterations"
     assert f"min normal force {checks['min_normal_force']:.1f} N" in text
     assert f"friction ratio {checks['max_friction_ratio']:.3f} (mu 0.4)" in text
-    assert f"centre-of-pressure margin {checks['cop_margin_loaded']:.3f} m" in text
+    assert f"centre-of-pressure margin {1e3 * checks['cop_margin_loaded']:.2f} mm" in text
+    assert f"COM margin {1e3 * checks['com_margin']:.2f} mm" in text
     assert f"Eq. 33 feet distance (both toe tips) {checks['eq33_feet_distance']:.3f} m" in text
     assert f"toe tip: forward travel {checks['toe_displacement']:.3f} m; in contact slip {100 * checks['toe_slip']:.2f} cm" in text
