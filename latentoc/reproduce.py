@@ -62,7 +62,7 @@ NOTES = {
                "a restitution of 0.5; ours holds the torque limits (Eq. 34), the friction cones, the centre of "
                "pressure, the ZMP and the COM (Eq. 35-36) as hard constraints, on the 1 kHz grid where they are "
                "sampled, with an inelastic foot impact. The paper's distance (1.45 m initially) most likely counts "
-               "both feet (Eq. 33 integrates the feet's speed): ours is one toe tip's, {initial:.3f} m initially."),
+               "both feet (Eq. 33 integrates the feet's speed): ours is one toe tip's{initial}."),
 }
 
 
@@ -210,5 +210,6 @@ def report(rep: Reproduction) -> str:
                                      "ok" if r.success else r.status] for r in rep.table6 if r.tube is not None],
                                    ["delta", "distance m", "gain %", "time s"],
                                    ["delta", "distance m", "gain %", "time s", "status"]))
-    parts += ["", NOTES["table6"].format(initial=jump_initial), ""]
+    initial = f", {jump_initial:.3f} m initially" if np.isfinite(jump_initial) else ""
+    parts += ["", NOTES["table6"].format(initial=initial), ""]
     return "\n".join(parts)

@@ -78,7 +78,7 @@ def _edited(tmp_path, name, old, new):
     ("broad-jump", ("friction = 0.4", 'friction = "high"'), "key 'options.friction' must be a number > 0, got 'high'"),
     ("broad-jump", ("n_flight = 80", "n_flight = 80.5"), "key 'options.n_flight' must be an integer >= 2, got 80.5"),
     ("broad-jump", ("two_phase = true", "two_phase = 1"), "key 'options.two_phase' must be true or false, got 1"),
-    ("broad-jump", ('sweep_starts = "warm+cold"', 'sweep_starts = "cold"'), "key 'options.sweep_starts' must be one of "
+    ("broad-jump", ('sweep_starts = "warm"', 'sweep_starts = "cold"'), "key 'options.sweep_starts' must be one of "
                                                                             "'warm\\+cold', 'warm', got 'cold'"),
     ("broad-jump", ("training_stride = 1", "training_stride = 0"), "options.training_stride' must be an integer >= 1"),
 ])
