@@ -4,8 +4,6 @@ browser with its own profile, loads a page from a file and lets ``budget_ms`` of
 pass (the page's clock and requestAnimationFrame run on it) before the screenshot or the DOM."""
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 import tempfile
 from pathlib import Path
@@ -13,16 +11,9 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run", "--hide-scrollbars", "--mute-audio"]
+from latentoc.viewer.still import FLAGS, chromium  # the package's own browser lookup and flags
 
-
-def chromium() -> str | None:
-    """The browser's executable, or None (then the browser tests skip, saying so)."""
-    for name in (os.environ.get("LATENTOC_CHROMIUM"), "chromium", "chromium-browser", "google-chrome"):
-        if name and shutil.which(name):
-            return shutil.which(name)
-    return None
+__all__ = ["chromium", "screenshot", "dom"]
 
 
 def _run(page: Path, budget_ms: int, *extra: str, url_suffix: str = "") -> subprocess.CompletedProcess:
