@@ -15,6 +15,11 @@ so each block is compiled as three small Functions, mapped over its nodes:
 * ``hess``: (y, yd, ydd, r, G0, G1, G2, l) -> (d2(l . F)/ds2 with the GP curvature left out,
   d(l . F)/d(y, yd, ydd)), the second output for the GP layer's curvature term.
 
+Fed by the identity layer (the joint path itself, y = x: G0 = I, G1 = G2 = 0), a block marked
+``identity`` takes its derivatives in (y, yd, ydd, r) directly: the tangents are constants of
+its derivatives, not symbols to multiply by (with d = D = 37 the products with symbolic 37 x 37
+tangents would dominate them); it takes the same inputs.
+
 Their size depends on the robot and the row definition, not on the GPDM: they are cached on
 disk keyed by the serialized rows and d, so a new GPDM, tube, motion or node count reuses them.
 """
@@ -53,6 +58,7 @@ class RobotBlock:
     latent_dim: int
     layout: dict[str, slice] = field(default_factory=dict)  # named row ranges of F
     hot: bool = True  # evaluated at many nodes every iteration: compiled for speed (:func:`jit.flags_for`)
+    identity: bool = False  # fed by the identity layer: tangents (I, 0, 0) as constants (module doc)
     functions: dict[str, ca.Function] = field(default_factory=dict, repr=False)
     instructions: dict[str, int] = field(default_factory=dict, repr=False)  # of the compiled pieces
     _maps: dict = field(default_factory=dict, repr=False)
@@ -89,11 +95,14 @@ class RobotBlock:
     def derivative_functions(self, pieces: tuple[str, ...] = PIECES) -> dict[str, ca.Function]:
         """The SX Functions ``rows``, ``jac`` and ``hess`` (module doc), or those of ``pieces``."""
         D, d, nr, name = self.output_dim, self.latent_dim, self.n_extra, self.name
+        if self.identity and D != d:
+            raise ValueError(f"block {name}: an identity block needs d = D, got d = {d}, D = {D}")
         y, yd, ydd, r = block_inputs(D, nr)
         G = [ca.SX.sym(f"G{i}", D, d) for i in range(3)]
+        T = [ca.DM.eye(D), ca.DM(D, d), ca.DM(D, d)] if self.identity else G  # the tangents in the rows
         s = ca.SX.sym("s", self.n_local)
         sx, sv, sa, sr = s[:d], s[d:2 * d], s[2 * d:3 * d], s[3 * d:]
-        lin = (y + G[0] @ sx, yd + G[1] @ sx + G[0] @ sv, ydd + G[2] @ sx + 2 * G[1] @ sv + G[0] @ sa, r + sr)
+        lin = (y + T[0] @ sx, yd + T[1] @ sx + T[0] @ sv, ydd + T[2] @ sx + 2 * T[1] @ sv + T[0] @ sa, r + sr)
         zero = ca.DM.zeros(s.shape)
         F = self.rows_sx(y, yd, ydd, r)
         ins, names = [y, yd, ydd, r], ["y", "yd", "ydd", "r"]
@@ -167,7 +176,8 @@ class MappedCall:
 
 def _index_file(block: RobotBlock) -> Path:
     key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, jit.CASADI_VERSION,
-                     str(jit.compiler()), str(block.hot), *jit.JIT_FLAGS, *jit.ONCE_FLAGS, str(jit.LARGE_FUNCTION)])
+                     str(jit.compiler()), str(block.hot), *jit.JIT_FLAGS, *jit.ONCE_FLAGS, str(jit.LARGE_FUNCTION),
+                     *(["identity"] if block.identity else [])])
     return jit.cache_dir() / f"rb_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
 
 

@@ -33,6 +33,8 @@ class BlockEvaluator:
         if block.latent_dim != layer.latent_dim or block.output_dim != layer.output_dim:
             raise ValueError(f"block {block.name} takes d = {block.latent_dim}, D = {block.output_dim}; "
                              f"the layer has d = {layer.latent_dim}, D = {layer.output_dim}")
+        if block.identity and not isinstance(layer, IdentityLayer):
+            raise ValueError(f"block {block.name} takes its tangents as (I, 0, 0): it needs the identity layer")
         compile_blocks([block])
         self.block, self.layer = block, layer
         self.n_in, self.n_out = block.n_local, block.n_out
