@@ -67,7 +67,8 @@ def violations(sr: dict[str, np.ndarray], traj: dict, delta: float, weight: floa
 
     return {"torque": worst(sr["torque"]), "normal": worst(sr["normal"]), "friction": worst(sr["friction"]),
             "point_cone": worst(sr["point_cone"]), "cop": worst(sr["cop_loaded"]), "zmp": worst(sr["zmp"]),
-            "com": worst(sr["com"]), "tube": float(max(0.0, np.max(traj["sigma2"]) / delta - 1.0))}
+            "com": worst(sr["com"]), "tube": float(max(0.0, np.max(traj["sigma2"]) / delta - 1.0)) if "sigma2" in traj
+            else 0.0}
 
 
 def violated(v: dict[str, float]) -> bool:
@@ -125,8 +126,10 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
         picked_c.update(worst_times(poly[:, e], poly_near[:, e] & inside, every, nb).tolist())
     kc = _allowed(np.array(sorted(picked_c), int), contact & inside)
     kf = _allowed(np.array(sorted(picked_f), int), ~contact & inside)
-    sigma = np.asarray(traj["sigma2"]) / delta
-    kt = _allowed(worst_times(-sigma, (sigma > 1.0 - m.tube) & inside, every, nb), inside)
+    kt = np.zeros(0, int)
+    if "sigma2" in traj:  # a latent path: the tube
+        sigma = np.asarray(traj["sigma2"]) / delta
+        kt = _allowed(worst_times(-sigma, (sigma > 1.0 - m.tube) & inside, every, nb), inside)
     node_torque, node_polygon = _node_rows(nlp, w, robot, phases, m)
     return Selection(node_torque, node_polygon, t[kc], torque_near[kc], poly_near[kc], t[kf], torque_near[kf], t[kt])
 

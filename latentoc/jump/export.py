@@ -1,6 +1,7 @@
 """The solved jump on a 1 kHz grid: q, v, a, torques and contact forces, for the numeric checks.
 
-Joint motion from the GP layer along the optimal latent path, the base from the contact
+Joint motion from the GP layer along the optimal latent path (or the joint path itself, the
+identity layer: then no latent path and no sigma^2), the base from the contact
 phases' splines and, in flight, ballistic from the takeoff state with the pitch rate
 integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
 and samples (the wrench split is part of the solution there); between them, the edge weights
@@ -14,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import nnls
 
-from ..latent.gp_layer import GPLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer
 from .base import base_to_freeflyer
 from .contact import EDGES, POINTS, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 from .flight import ballistic_base, flight_functions
@@ -27,7 +28,7 @@ __all__ = ["trajectory", "corrected_edge_weights"]
 SAGITTAL = [0, 2, 4]
 
 
-def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, nlp: JumpNLP, w: np.ndarray,
+def trajectory(robot: JumpRobot, layer: GPLayer | IdentityLayer, phases: Phases, nlp: JumpNLP, w: np.ndarray,
                rate_hz: float = 1000.0) -> dict:
     """Arrays of solution ``w`` of ``nlp`` on a 1 kHz grid and at the contact nodes (module doc)."""
     ph = phases
@@ -38,7 +39,7 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, nlp: JumpNLP, w
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
     X, Xd, Xdd = (sp_.evaluate(P, t, k) for k in range(3))
     m = layer.motion(np.hstack([X, Xd, Xdd]))
-    sigma2 = layer.variance(X)[0]
+    path = {"sigma2": layer.variance(X)[0], "latent": X} if isinstance(layer, GPLayer) else {}
     st, la = t <= ph.takeoff, t >= ph.touchdown
     fl = ~st & ~la
     B = [np.zeros((len(t), 3)) for _ in range(3)]
@@ -97,7 +98,7 @@ def trajectory(robot: JumpRobot, layer: GPLayer, phases: Phases, nlp: JumpNLP, w
         node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_feet[i], mu)).ravel()
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
             "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
-            "loaded": loaded.astype(np.int8), "sigma2": sigma2, "latent": X, "control_points": P,
+            "loaded": loaded.astype(np.int8), **path, "control_points": P,
             "node_t": node_t, "node_wrench": node_w, "node_lambda": lam_nodes.T,
             "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
             "contact_points": np.array(POINTS), "heel_offset": robot.geom.heel_offset,

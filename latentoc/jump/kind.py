@@ -6,9 +6,10 @@ Its schema, tube reference and solve are :mod:`.problem`'s; its NLP builder stay
 from __future__ import annotations
 
 from ..kind import Kind
+from .path import METHODS
 from .problem import SCHEMA, solve_jump_problem, tube_reference
 
 __all__ = ["BROAD_JUMP"]
 
-#: the broad jump (Sect. 4.2): method "latent" only
-BROAD_JUMP = Kind(schema=SCHEMA, tube_reference=tube_reference, solve=solve_jump_problem)
+#: the broad jump (Sect. 4.2): methods "latent" and "joint-range" (the full configuration space)
+BROAD_JUMP = Kind(schema=SCHEMA, tube_reference=tube_reference, solve=solve_jump_problem, methods=METHODS)

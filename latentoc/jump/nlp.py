@@ -1,6 +1,7 @@
 """The broad-jump NLP (Sect. 4.2, Eq. 33-36): row families on nodes and samples, bounds, objective.
 
-Joint motion: y = mu_Q(x(t)) along the latent spline (Eq. 18, 26-28, the GP layer); the base
+Joint motion: y = mu_Q(x(t)) along the latent spline (Eq. 18, 26-28, the GP layer), or, for the
+full configuration-space baseline, the joint spline itself (the identity layer, :mod:`.path`); the base
 has its own (x, z, pitch) splines in the stance and the landing, and falls freely in flight.
 Hard constraints, each a row family (:mod:`.rows`), where :class:`~.selection.Selection` puts
 them:
@@ -13,7 +14,7 @@ them:
 * takeoff and touchdown: the flight's state from the stance, the inelastic impact;
 * the flight: the pitch integrates the pitch rate of the conserved momentum, the feet stay above
   the ground at the flight nodes, and flight samples hold the free-fall rows and chosen torques;
-* the tube sigma^2 <= delta (Eq. 29) at the selection's times.
+* the tube sigma^2 <= delta (Eq. 29) at the selection's times (a latent path only).
 
 Objective: phase 1 (``"feasibility"``) the feasible point nearest the training fit; phase 2
 (``"distance"``) the jump distance x_L (Eq. 33); both with a tiny force regulariser.
@@ -25,7 +26,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..latent.gp_layer import GPLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer
 from ..nlp.assemble import SparseNLP
 from ..nlp.blocks import RobotBlock
 from ..spline import BSpline
@@ -129,11 +130,13 @@ def flight_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 
     return t[(t > ph.takeoff) & (t < ph.touchdown)]
 
 
-def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], phases: Phases,
+def build_nlp(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
               settings: JumpSettings, P_fixed: np.ndarray, objective: str = "distance",
-              selection: Selection | None = None) -> JumpNLP:
-    """The NLP of one phase of the solve (module doc); ``P_fixed`` holds the latent end points,
-    ``selection`` the chosen rows and samples (default: every node row, the tube, no samples)."""
+              selection: Selection | None = None, P_range: np.ndarray | None = None) -> JumpNLP:
+    """The NLP of one phase of the solve (module doc); ``P_fixed`` holds the spline's end points
+    (and the free points' centres), ``selection`` the chosen rows and samples (default: every
+    node row, the tube of a latent path, no samples), ``P_range`` the free control points'
+    half-widths around ``P_fixed`` (None: unbounded)."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
     s, ph = settings, phases
@@ -141,9 +144,13 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     grid = node_grid(s, ph)
     tc = np.concatenate([grid["stance"], grid["land"]])
     nC, nk = len(tc), len(robot.unmirrored)
-    sel = Selection.every_node_row(nC, nk, tube_times(s, ph)) if selection is None else selection
+    tube = isinstance(layer, GPLayer)  # sigma^2 is the GPDM's: a joint path has no tube
+    sel = Selection.every_node_row(nC, nk, tube_times(s, ph) if tube else np.zeros(0)) if selection is None \
+        else selection
     if sel.node_torque.shape != (nC, nk):
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
+    if len(sel.tube) and not tube:
+        raise ValueError("the selection has tube points but the layer has no sigma^2 (a joint path)")
     splines = (BSpline(s.n_control, T), BSpline(s.n_base_stance, ph.takeoff), BSpline(s.n_base_land, T - ph.touchdown))
     var = JumpVariables.layout(s.n_control, layer.latent_dim, s.n_base_stance, s.n_base_land, nC, len(grid["flight"]),
                                len(sel.contact), len(sel.flight))
@@ -154,6 +161,10 @@ def build_nlp(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], p
     names, times, comps = np.array(w.names), np.array(w.times, float), np.array(w.comps, np.int64)
     lbg, ubg = _row_bounds(names, comps, times, robot, s, ph)
     lbx, ubx = _variable_bounds(var, ph, tc, sel.contact)
+    if P_range is not None:  # the free control points within +-P_range of P_fixed's (joint range)
+        P0 = np.asarray(P_fixed, float)[1:-1]
+        half = np.broadcast_to(np.asarray(P_range, float), P0.shape)
+        lbx[var.slices["P"]], ubx[var.slices["P"]] = (P0 - half).ravel(), (P0 + half).ravel()
     nsub = max(1, int(s.flight_substeps))
     return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, splines, sel, objective,
                    np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, nsub), nsub)
@@ -165,7 +176,7 @@ def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Fu
     reg = FORCE_REGULARISATION * (ca.sumsqr(lam) + ca.sumsqr(imp) + ca.sumsqr(lam_s))
     if objective == "distance":
         f = -w[var.slices["x_L"]] + reg
-    else:  # the squared deviation of the free latent control points from the training fit
+    else:  # the squared deviation of the free control points from the training fit
         P0 = np.asarray(P_fixed, float)[1:-1].ravel()
         f = ca.sumsqr(w[var.slices["P"]] - P0) / max(float(np.mean(np.square(P_fixed))), 1e-12) + reg
     return ca.Function("jump_objective", [w], [f])

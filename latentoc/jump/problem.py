@@ -21,7 +21,7 @@ from ..dynamics import SymbolicModel
 from ..mocap.symmetry import SymmetryMap
 from ..errors import ProblemError, SolveError
 from ..gpdm import GPDM, GPDMSettings, cached_gpdm
-from ..latent.gp_layer import GPLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer
 from ..nlp.blocks import RobotBlock, compile_blocks
 from ..kind import Solution
 from ..problem import Problem, apply_overrides
@@ -29,13 +29,14 @@ from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, li
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, resolve_tube
 from .contact import POINTS, FootGeometry, foot_points
+from .path import METHODS, checked_joint_range, joint_range_path, latent_path
 from .phases import Phases, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
 from .settings import FIELD_DOCS, JumpSettings
 from .solve import JumpSolution, solve_jump
 from .torque_limits import TrainingDynamics, estimate_training_dynamics
-from .training import JumpTraining, jump_model, training_jumps
+from .training import JumpTraining, antisymmetric_centre, jump_model, training_jumps
 
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
            "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
@@ -62,13 +63,17 @@ class JumpSetup:
     def robot(self, mu: float) -> JumpRobot:
         return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)))
 
-    def blocks(self, robot: JumpRobot) -> dict[str, RobotBlock]:
-        """The row families' blocks, compiled (or found in the disk cache) once per set-up and mu."""
-        if robot.mu not in self._blocks:
-            blocks = row_blocks(robot, self.gpdm.latent_dim)
+    def blocks(self, robot: JumpRobot, layer: GPLayer | IdentityLayer | None = None) -> dict[str, RobotBlock]:
+        """The row families' blocks for ``layer`` (default: the GP layer's latent dimension),
+        compiled (or found in the disk cache) once per set-up, mu and layer kind."""
+        joint_space = isinstance(layer, IdentityLayer)
+        d = self.gpdm.latent_dim if layer is None else layer.latent_dim
+        key = (robot.mu, d, joint_space)
+        if key not in self._blocks:
+            blocks = row_blocks(robot, d, joint_space)
             compile_blocks(list(blocks.values()))
-            self._blocks[robot.mu] = blocks
-        return self._blocks[robot.mu]
+            self._blocks[key] = blocks
+        return self._blocks[key]
 
 
 def _toe_x(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
@@ -101,9 +106,12 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     X = gp.latent_trajectories()[0]
     P = initial_latent_path(BSpline(n_control, tr.duration), tr.t[::stride], X, path_smoothing,
                             np.array([phases.takeoff, phases.touchdown]))
+    # the full-space baseline's start: the least-squares fit of the training joints (every frame);
+    # unsmoothed, its accelerations are already below the latent start's joint motion's
+    P_joint = BSpline(n_control, tr.duration).fit(tr.t, tr.Y)
     bx = _toe_x(model, tr.Q, geom)
     td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
-    init = {"P": P, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
+    init = {"P": P, "P_joint": P_joint, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
     return JumpSetup(model, smap, tr, gp, phases, geom, limits, init, float(np.median(bx[td:]) - bx[0]),
                      SymbolicModel(model))
 
@@ -183,6 +191,10 @@ SCHEMA = Schema("broad-jump", (
     Setting("solver.max_iter", "max_iter", integer(1), _DEFAULTS.max_iter, "Ipopt iterations per phase"),
     Setting("solver.tol", "tol", number(0, lo_open=True), _DEFAULTS.tol, "Ipopt tolerance"),
     Setting("sweep.tubes", "sweep_tubes", list_of(TUBE), [_DEFAULTS.tube], "the sweep's tubes"),
+    Setting("sweep.ranges", "sweep_ranges", list_of(number(0, lo_open=True)), [30.0],
+            "the baseline sweep's joint ranges, deg (sweep --baseline joint-range)"),
+    Setting("baseline.joint_range_deg", "joint_range_deg", number(0, lo_open=True), 30.0,
+            "full-space baseline (method joint-range): +-deg around the training joints' fit"),
     Table("options", "options", tuple(
         [Setting(k, k, c, d, doc) for k, (c, d, doc) in SETUP_OPTIONS.items()]
         + [Setting(_TOML_NAMES.get(f.name, f.name), _TOML_NAMES.get(f.name, f.name),
@@ -272,57 +284,74 @@ def _violations(r: dict[str, Any], checks: dict[str, float], mu: float) -> dict[
             "dynamics_bw": checks["max_dynamics_residual"]}
 
 
+def _joint_range(problem: Problem, method: str, joint_range_deg: float | None) -> float | None:
+    """The joint range (deg) of ``method`` (None for the latent path); a SolveError for an unknown
+    method or a bad range, before any work."""
+    if method not in METHODS:
+        raise SolveError(f"unknown method {method!r} for broad-jump; choose one of {', '.join(METHODS)}")
+    if method == "latent":
+        return None
+    return checked_joint_range(problem.joint_range_deg if joint_range_deg is None else joint_range_deg)
+
+
 def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
                        gpdm: GPDM | None = None, verbose: bool = False, warm_start: Solution | None = None,
                        **overrides: Any) -> Solution:
-    """Solve, check on 1 kHz, return a :class:`latentoc.kind.Solution`. ``warm_start``: the
-    Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =
+    """Solve, check on 1 kHz, return a :class:`latentoc.kind.Solution`. ``method``: ``"latent"``,
+    or ``"joint-range"`` (the 37 joints as the spline, within +-``joint_range_deg`` of the training
+    fit; default the problem's ``baseline.joint_range_deg``; no tube, no warm start). ``warm_start``:
+    the Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =
     "warm+cold"`` the tube is also solved from the training fit and the better jump kept.
     ``overrides`` (tube, control_points, ...) change the problem's settings first."""
     from .verify import verify
 
     problem = apply_overrides(problem, overrides)
-    if method != "latent":
-        raise SolveError(f"broad-jump supports method 'latent' only, got {method!r}")
+    k = _joint_range(problem, method, joint_range_deg)
     o = problem.options
     t0 = time.perf_counter()
     js = problem_setup(problem)
     gpdm_time = time.perf_counter() - t0
+    path = latent_path(GPLayer(js.gpdm), js.init["P"]) if k is None else \
+        joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
     delta = resolve_tube(problem.tube, js.gpdm.tube_size())
     s = settings_from_problem(problem, delta)
     robot = js.robot(s.mu)
-    layer = GPLayer(js.gpdm)
     t1 = time.perf_counter()
-    blocks = js.blocks(robot)
+    blocks = js.blocks(robot, path.layer)
     compile_time = time.perf_counter() - t1
-    sol = solve_from_starts(lambda warm: solve_jump(robot, layer, blocks, js.phases, s, js.init, js.model, warm=warm,
-                                                    verbose=verbose),
-                            usable_warm_start(warm_start, delta), o["sweep_starts"])
+    start = {**js.init, "P": path.P, "P_range": path.P_range}
+    warm = usable_warm_start(warm_start, delta) if path.has_tube else None
+    sol = solve_from_starts(lambda w: solve_jump(robot, path.layer, blocks, js.phases, s, start, js.model, warm=w,
+                                                 verbose=verbose), warm, o["sweep_starts"])
     t2 = time.perf_counter()
     traj = sol.trajectory
     checks = verify(js.model, traj, s.mu, checked=sol.series)
     verify_time = time.perf_counter() - t2
     r = sol.result
-    r.update({"problem": problem.name, "kind": problem.kind, "method": "latent", "tube_spec": problem.tube,
-              "distance_initial": js.distance_training,
+    r.update({"problem": problem.name, "kind": problem.kind, "method": method, "distance_initial": js.distance_training,
               "performance_gain_pct": 100.0 * (r["distance"] - js.distance_training) / js.distance_training,
-              "training_points": int(js.gpdm.X.shape[0]), "tube_training": js.gpdm.tube_size(),
-              "tube_relative": relative_tube(delta, js.gpdm), "latent_dim": js.gpdm.latent_dim,
-              "max_sigma2": float(np.max(traj["sigma2"])), "control_points": s.n_control,
-              "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
+              "control_points": s.n_control, "gpdm_time_s": gpdm_time, "compile_time_s": compile_time,
               "build_time_s": sol.result["times"]["build_s"], "solve_time_s": sol.result["times"]["solve_s"],
               "check_time_s": sol.result["times"]["check_s"] + verify_time,
-
-              **js.gpdm.learning_summary(),
               "cost_initial": js.distance_training, "cost": r["distance"],
               "cost_meaning": "jump distance of the toe tip in metres (maximised, Eq. 33)",
-              "friction": s.mu, "restitution_paper": 0.5, "restitution_used": 0.0,
-              "max_tube_violation": max(0.0, float(np.max(traj["sigma2"])) - delta), "quadrature_error": 0.0,
+              "friction": s.mu, "restitution_paper": 0.5, "restitution_used": 0.0, "quadrature_error": 0.0,
               "jump_settings": asdict(s)})
+    if path.has_tube:
+        r.update({"tube_spec": problem.tube, "training_points": int(js.gpdm.X.shape[0]),
+                  "tube_training": js.gpdm.tube_size(), "tube_relative": relative_tube(delta, js.gpdm),
+                  "latent_dim": js.gpdm.latent_dim, "max_sigma2": float(np.max(traj["sigma2"])),
+                  "max_tube_violation": max(0.0, float(np.max(traj["sigma2"])) - delta), **js.gpdm.learning_summary()})
+    else:  # the joints are the spline: no tube, no GPDM in the solve
+        assert path.P_range is not None
+        r.update({"tube": None, "joint_range_deg": k, "joints": int(path.layer.latent_dim),
+                  "fixed_joints": int(np.sum(np.all(path.P_range == 0, axis=0))), "max_tube_violation": 0.0})
     r.pop("settings", None)  # solve_jump's copy of the JumpSettings: jump_settings above
     r.update(checks)
     r["violations"] = _violations(r, checks, s.mu)
-    traj["x"], traj["P"] = traj.pop("latent"), traj.pop("control_points")  # the result schema's names
+    traj["P"] = traj.pop("control_points")  # the result schema's names
+    if "latent" in traj:
+        traj["x"] = traj.pop("latent")
     r["total_time_s"] = time.perf_counter() - t0
-    return Solution(result=r, trajectory=traj, warm=sol.warm_start() if r["success"] else None, gpdm=js.gpdm)
-
+    warm_out = sol.warm_start() if r["success"] and path.has_tube else None
+    return Solution(result=r, trajectory=traj, warm=warm_out, gpdm=js.gpdm if path.has_tube else None)

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..latent.gp_layer import GPLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer
 from ..nlp import ipopt
 from ..nlp.blocks import RobotBlock
 from ..nlp.exchange import Exchange, exchange_rounds
@@ -84,12 +84,12 @@ def _run_summary(run: ipopt.IpoptResult, nlp: JumpNLP) -> dict:
 class _Solve:
     """One tube's solve: its clock, how it builds, checks and runs Ipopt (:func:`solve_jump`)."""
 
-    def __init__(self, robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], phases: Phases,
+    def __init__(self, robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
                  settings: JumpSettings, start: dict, model: pin.Model, verbose: bool):
         self.robot, self.layer, self.blocks, self.ph, self.s = robot, layer, blocks, phases, settings
         self.start, self.model, self.clock = start, model, _Clock()
         self.opts = ipopt_options(settings, verbose)
-        self.tube = tube_times(settings, phases)
+        self.tube = tube_times(settings, phases) if isinstance(layer, GPLayer) else np.zeros(0)  # no tube on a joint path
         self.t0 = time.perf_counter()
         self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
 
@@ -97,7 +97,8 @@ class _Solve:
         self.t0 = self.clock.add(part, self.t0)
 
     def build(self, objective: str, selection: Selection) -> JumpNLP:
-        nlp = build_nlp(self.robot, self.layer, self.blocks, self.ph, self.s, self.start["P"], objective, selection)
+        nlp = build_nlp(self.robot, self.layer, self.blocks, self.ph, self.s, self.start["P"], objective, selection,
+                        self.start.get("P_range"))
         self.lap("build_s")
         return nlp
 
@@ -175,10 +176,11 @@ class _Solve:
         return exchange_rounds(nlp2, start, kind, s.exchange_rounds, s.exchange)
 
 
-def solve_jump(robot: JumpRobot, layer: GPLayer, blocks: dict[str, RobotBlock], phases: Phases,
+def solve_jump(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
                settings: JumpSettings, start: dict, model: pin.Model, warm: dict | None = None,
                verbose: bool = False) -> JumpSolution:
-    """Solve the jump (module doc). ``start`` holds the training start (P, t, base, x_L);
+    """Solve the jump (module doc) along the path of ``layer`` (:mod:`.path`). ``start`` holds the
+    training start (P, t, base, x_L) and, for a joint path, the control points' ``P_range``;
     ``model`` is the numeric model the 1 kHz checks use; ``warm`` is a neighbouring solve's
     :meth:`JumpSolution.warm_start`."""
     js = _Solve(robot, layer, blocks, phases, settings, start, model, verbose)

@@ -1,6 +1,7 @@
 """The jump's initial point: the training motion in the NLP's variables.
 
-The latent path is the setup's smoothed fit of the learned latent points; the contact phases'
+The path is the setup's smoothed fit of the learned latent points (or of the training joints,
+:mod:`.path`); the contact phases'
 base splines are least-squares fits of the captured base; the flight's takeoff state and pitch
 follow from the stance at takeoff (ballistic, :mod:`.flight`); the contact forces are the
 non-negative edge weights of the loaded points that best balance each node's base rows. The
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
-from ..latent.gp_layer import GPLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer
 from .contact import EDGES
 from .flight import ballistic_base, flight_functions
 from .nlp import JumpNLP
@@ -21,15 +22,15 @@ from .robot import JumpRobot
 __all__ = ["initial_point", "sample_values", "balanced_forces"]
 
 
-def _joint_motion(layer: GPLayer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.ndarray]:
+def _joint_motion(layer: GPLayer | IdentityLayer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.ndarray]:
     Z = np.hstack([sp_.evaluate(P, t, k) for k in range(3)])
     m = layer.motion(Z)
     return [m.y.T, m.yd.T, m.ydd.T]  # n x K each
 
 
-def initial_point(robot: JumpRobot, layer: GPLayer, nlp: JumpNLP, P: np.ndarray, t: np.ndarray, base: np.ndarray,
+def initial_point(robot: JumpRobot, layer: GPLayer | IdentityLayer, nlp: JumpNLP, P: np.ndarray, t: np.ndarray, base: np.ndarray,
                   x_L: float, takeoff: float, touchdown: float) -> np.ndarray:
-    """The training start (module doc) of ``nlp`` from the latent control points P, the captured
+    """The training start (module doc) of ``nlp`` from the path's control points P, the captured
     base (t, base) and the landing toe point x_L."""
     var = nlp.variables
     sp_, sps, spl = nlp.splines

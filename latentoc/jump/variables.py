@@ -1,6 +1,7 @@
 """The broad jump's decision vector: named blocks and their positions in w.
 
-* ``P``: the free latent control points (the end points stay on the training path);
+* ``P``: the free control points of the latent (or joint) spline (the end points stay on the
+  training path);
 * ``base_stance``, ``base_land``: the (x, z, pitch) base splines of the contact phases;
 * ``x_L``: the landing toe tip's ground point (the jump distance, Eq. 33);
 * ``lam``: friction-pyramid edge weights at the contact nodes (heel, ball, toe, pad; body weights);
@@ -49,7 +50,7 @@ class JumpVariables:
         return np.arange(self.slices[name].start, self.slices[name].stop).reshape(self.shapes[name])
 
     def latent_index(self) -> np.ndarray:
-        """(n_control x d) positions of every latent control point, -1 for the fixed end points."""
+        """(n_control x d) positions of every control point of the path, -1 for the fixed end points."""
         P = self.index("P")
         fixed = -np.ones((1, P.shape[1]), np.int64)
         return np.vstack([fixed, P, fixed])

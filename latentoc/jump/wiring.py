@@ -1,7 +1,7 @@
 """How a row family's nodes see the decision vector, and what its rows are: the pieces each row
 module (:mod:`.rows`) wires its block with.
 
-A :class:`Wiring` holds what every family needs (the robot, the GP layer, the blocks, the phases,
+A :class:`Wiring` holds what every family needs (the robot, the GP or identity layer, the blocks, the phases,
 the settings, the selection, the variables and splines); :class:`Rows` picks a block's outputs at
 its nodes as constraint rows, each with a name, a time and a component (the joint among the kept
 ones, the polygon edge, or the output's index), the row's identity across NLPs
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..latent.gp_layer import GPLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer
 from ..nlp.assemble import Family
 from ..nlp.blocks import RobotBlock
 from ..nlp.evaluators import BlockEvaluator
@@ -61,13 +61,13 @@ class Wiring:
     """What the row modules wire their families with, and the families they add (module doc)."""
 
     robot: JumpRobot
-    layer: GPLayer
+    layer: GPLayer | IdentityLayer
     blocks: dict[str, RobotBlock]
     phases: Phases
     settings: JumpSettings
     selection: Selection
     variables: JumpVariables
-    splines: tuple[BSpline, BSpline, BSpline]  # latent path, stance base, landing base
+    splines: tuple[BSpline, BSpline, BSpline]  # latent (or joint) path, stance base, landing base
     P_fixed: np.ndarray
     grid: dict[str, np.ndarray]
     families: list[Family] = field(default_factory=list)
@@ -83,7 +83,7 @@ class Wiring:
         return NodeInputs(K, self.n_w)
 
     def latent(self, ni: NodeInputs, t: np.ndarray, orders: int = 3) -> None:
-        """The latent path's value and time derivatives (``orders`` of them) at times t."""
+        """The path's value and time derivatives (``orders`` of them) at times t."""
         ni.spline([self.splines[0].basis(t, k) for k in range(orders)], self.variables.latent_index(), self.P_fixed)
 
     def base(self, ni: NodeInputs, t: np.ndarray, orders: int = 3) -> None:

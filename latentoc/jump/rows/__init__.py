@@ -12,6 +12,8 @@ lists them in the NLP's order.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 
 from ...nlp.blocks import RobotBlock, block_inputs
@@ -30,13 +32,15 @@ def inputs(robot: JumpRobot, spec: dict[str, int]) -> tuple[tuple[ca.SX, ca.SX, 
     return sym, parts
 
 
-def row_blocks(robot: JumpRobot, d: int) -> dict[str, RobotBlock]:
-    """Every row family's block for latent dimension d."""
+def row_blocks(robot: JumpRobot, d: int, joint_space: bool = False) -> dict[str, RobotBlock]:
+    """Every row family's block for latent dimension d; ``joint_space``: for the joint path itself
+    (the identity layer, d = 37), whose tangents are constant (:attr:`RobotBlock.identity`)."""
     from . import contact, flight, transitions
 
-    return {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
-            "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
-            "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
+    blocks = {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
+              "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
+              "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
+    return {k: replace(b, identity=True, functions={}, instructions={}, _maps={}) for k, b in blocks.items()} if joint_space else blocks
 
 
 def families() -> tuple:

@@ -1,0 +1,64 @@
+"""The spline a jump method solves along: the latent path, or the 37 joints themselves.
+
+* ``"latent"``: the latent spline x(t) and the GPDM mean through it (Eq. 18, 23-28,
+  :class:`~latentoc.latent.gp_layer.GPLayer`), the tube sigma^2 <= delta (Eq. 29) held;
+* ``"joint-range"``: the full configuration-space baseline of Sect. 4.1.1 on the humanoid. The
+  spline is the joint path (y = x, :class:`~latentoc.latent.gp_layer.IdentityLayer`) with as many
+  control points and the same knots as the latent spline, starting from the least-squares fit of
+  the training jump's 37 learned joints (:func:`.problem.setup`);
+  each free control point stays within +-k degrees of that fit (Table 2's "joint range"), and the
+  centre joints that flip sign under the mirror stay zero (a symmetric motion has none). No tube.
+
+Every other row of the jump (contact, flight, ZMP, COM, torque limits, friction) is the same NLP.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import SolveError
+from ..latent.gp_layer import GPLayer, IdentityLayer
+
+__all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path", "checked_joint_range"]
+
+METHODS = ("latent", "joint-range")
+
+
+@dataclass(frozen=True)
+class JumpPath:
+    """A method's spline: its layer, start control points (the end points stay fixed) and the
+    half-widths of the free control points' bounds around them (None: unbounded)."""
+
+    method: str
+    layer: GPLayer | IdentityLayer
+    P: np.ndarray  # (n_control x d)
+    P_range: np.ndarray | None = None  # (n_control - 2 x d)
+
+    @property
+    def has_tube(self) -> bool:
+        """Whether the path carries the tube (Eq. 29): only the latent path has a sigma^2."""
+        return isinstance(self.layer, GPLayer)
+
+
+def latent_path(layer: GPLayer, P: np.ndarray) -> JumpPath:
+    """The latent spline from the control points P of the training fit."""
+    return JumpPath("latent", layer, np.asarray(P, float))
+
+
+def joint_range_path(P_joint: np.ndarray, joint_range_deg: float, fixed: np.ndarray) -> JumpPath:
+    """The joint spline from the training joints' fit ``P_joint`` (n_control x 37), each free
+    control point within +-``joint_range_deg`` of it; the joints ``fixed`` (indices) stay there."""
+    P = np.asarray(P_joint, float)
+    half = np.full((P.shape[0] - 2, P.shape[1]), np.radians(checked_joint_range(joint_range_deg)))
+    half[:, np.asarray(fixed, int)] = 0.0
+    return JumpPath("joint-range", IdentityLayer(P.shape[1]), P, half)
+
+
+def checked_joint_range(value: object) -> float:
+    """``value`` as a joint range in degrees; a SolveError naming it unless a positive finite number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(value) or value <= 0:
+        raise SolveError(f"joint range (--joint-range, baseline.joint_range_deg) must be a positive number of "
+                         f"degrees, got {value!r}")
+    return float(value)
