@@ -15,8 +15,8 @@ def solve(problem: Problem, *, method: str = "latent", joint_range_deg: float | 
           gpdm: GPDM | None = None, warm_start: Result | Solution | None = None, verbose: bool = False) -> Result:
     """Solve ``problem`` (its settings: :func:`latentoc.load_problem` and :meth:`Problem.replace`).
 
-    ``method``: ``"latent"``, or ``"joint-range"`` for the arm's full configuration-space
-    baseline (``joint_range_deg``, default the problem's). ``gpdm``: a learned GPDM to use
+    ``method``: ``"latent"``, or ``"joint-range"`` for the full configuration-space baseline of
+    the arm or the broad jump (``joint_range_deg``, default the problem's). ``gpdm``: a learned GPDM to use
     instead of learning the problem's. ``warm_start``: the result of the same problem at a
     smaller tube, whose optimum the solve starts from. ``verbose``: Ipopt's own log.
     Input that cannot be solved raises :class:`~latentoc.errors.SolveError` before any work;
