@@ -24,11 +24,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+import numpy as np
+
+from .errors import SolveError
 from .gpdm import GPDM
 from .problem import Problem
 from .schema import Schema
 
-__all__ = ["Kind", "Solution", "Solver", "TubeReference"]
+__all__ = ["Kind", "Solution", "Solver", "TubeReference", "joint_range"]
 
 
 @dataclass
@@ -76,3 +79,15 @@ class Kind:
     def name(self) -> str:
         """The kind's name, its problem files' ``kind``."""
         return self.schema.kind
+
+
+def joint_range(problem: Problem, joint_range_deg: float | None = None) -> float:
+    """The full configuration-space baseline's joint range in degrees (method ``"joint-range"``):
+    ``joint_range_deg`` (``--joint-range``), else the problem's ``baseline.joint_range_deg``; a
+    SolveError naming it unless a positive finite number."""
+    value = problem.joint_range_deg if joint_range_deg is None else joint_range_deg
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(value) or value <= 0:
+        raise SolveError(f"joint range (--joint-range, baseline.joint_range_deg) must be a positive number of "
+                         f"degrees, got {value!r}")
+    return float(value)

@@ -17,10 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import SolveError
 from ..latent.gp_layer import GPLayer, IdentityLayer
 
-__all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path", "checked_joint_range"]
+__all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path"]
 
 METHODS = ("latent", "joint-range")
 
@@ -48,17 +47,9 @@ def latent_path(layer: GPLayer, P: np.ndarray) -> JumpPath:
 
 def joint_range_path(P_joint: np.ndarray, joint_range_deg: float, fixed: np.ndarray) -> JumpPath:
     """The joint spline from the training joints' fit ``P_joint`` (n_control x 37), each free
-    control point within +-``joint_range_deg`` of it; the joints ``fixed`` (indices) stay there."""
+    control point within +-``joint_range_deg`` (checked: :func:`latentoc.kind.joint_range`) of it;
+    the joints ``fixed`` (indices) stay there."""
     P = np.asarray(P_joint, float)
-    half = np.full((P.shape[0] - 2, P.shape[1]), np.radians(checked_joint_range(joint_range_deg)))
+    half = np.full((P.shape[0] - 2, P.shape[1]), np.radians(joint_range_deg))
     half[:, np.asarray(fixed, int)] = 0.0
     return JumpPath("joint-range", IdentityLayer(P.shape[1]), P, half)
-
-
-def checked_joint_range(value: object) -> float:
-    """``value`` as a joint range in degrees; a SolveError naming it unless a positive finite number."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(value) or value <= 0:
-        raise SolveError(f"joint range (--joint-range, baseline.joint_range_deg) must be a positive number of "
-                         f"degrees, got {value!r}")
-    return float(value)

@@ -23,13 +23,13 @@ from ..errors import ProblemError, SolveError
 from ..gpdm import GPDM, GPDMSettings, cached_gpdm
 from ..latent.gp_layer import GPLayer, IdentityLayer
 from ..nlp.blocks import RobotBlock, compile_blocks
-from ..kind import Solution
+from ..kind import Solution, joint_range
 from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, resolve_tube
 from .contact import POINTS, FootGeometry, foot_points
-from .path import METHODS, checked_joint_range, joint_range_path, latent_path
+from .path import METHODS, joint_range_path, latent_path
 from .phases import Phases, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
@@ -291,7 +291,7 @@ def _joint_range(problem: Problem, method: str, joint_range_deg: float | None) -
         raise SolveError(f"unknown method {method!r} for broad-jump; choose one of {', '.join(METHODS)}")
     if method == "latent":
         return None
-    return checked_joint_range(problem.joint_range_deg if joint_range_deg is None else joint_range_deg)
+    return joint_range(problem, joint_range_deg)
 
 
 def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,

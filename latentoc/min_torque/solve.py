@@ -20,7 +20,7 @@ import pinocchio as pin
 from ..dynamics import SymbolicModel
 from ..errors import SolveError
 from ..gpdm import GPDM
-from ..kind import Solution
+from ..kind import Solution, joint_range
 from ..motions import Demonstration, check_frames
 from ..motions.problem_inputs import problem_demonstration, require_fixed_base
 from ..problem import Problem
@@ -181,18 +181,16 @@ def _solve_latent(problem: Problem, demo: Demonstration, robot: pin.Model, setti
 
 def _solve_joint_range(problem: Problem, demo: Demonstration, robot: pin.Model, settings: MinTorqueSettings,
                        joint_range_deg: float | None, verbose: bool) -> Solution:
-    k = problem.joint_range_deg if joint_range_deg is None else joint_range_deg
-    if isinstance(k, bool) or not isinstance(k, (int, float, np.floating)) or not np.isfinite(k) or k <= 0:
-        raise SolveError(f"joint range must be a positive number of degrees, got {k!r}")
+    k = joint_range(problem, joint_range_deg)
     t_train, Q_train = np.asarray(demo.t), np.asarray(demo.Q)  # all frames: no GPDM here
     sym = SymbolicModel(robot)
     t0 = time.perf_counter()
-    nlp = joint_range_nlp(sym, settings, t_train, Q_train, float(k))
+    nlp = joint_range_nlp(sym, settings, t_train, Q_train, k)
     cost_initial = nlp.cost(nlp.w0)
     build_time = time.perf_counter() - t0
     _, result, trajectory = _solve_and_export(
-        problem, nlp, lambda extra: joint_range_nlp(sym, settings, t_train, Q_train, float(k), extra=extra), nlp.w0,
+        problem, nlp, lambda extra: joint_range_nlp(sym, settings, t_train, Q_train, k, extra=extra), nlp.w0,
         robot, settings, demo, cost_initial, verbose)
-    result.update({"joint_range_deg": float(k), "n_training_frames": int(len(t_train)), "build_time_s": build_time,
+    result.update({"joint_range_deg": k, "n_training_frames": int(len(t_train)), "build_time_s": build_time,
                    "gpdm_time_s": 0.0, "warm_start": False})
     return Solution(result=result, trajectory=trajectory)

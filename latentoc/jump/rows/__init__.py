@@ -40,7 +40,7 @@ def row_blocks(robot: JumpRobot, d: int, joint_space: bool = False) -> dict[str,
     blocks = {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
               "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
               "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
-    return {k: replace(b, identity=True, functions={}, instructions={}, _maps={}) for k, b in blocks.items()} if joint_space else blocks
+    return {k: replace(b, identity=True) for k, b in blocks.items()} if joint_space else blocks
 
 
 def families() -> tuple:
