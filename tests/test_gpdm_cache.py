@@ -25,6 +25,27 @@ def test_learned_once_then_read(tmp_path, monkeypatch):
     assert model_path([Y[:15], Y[15:]], settings) != path
 
 
+def test_a_model_of_another_learner_version_is_not_read(tmp_path, monkeypatch):
+    """A model cached by an earlier learner (stopped elsewhere near the minimum) is never read back
+    for the current one: a changed LEARNER_VERSION names the model anew, so it is learned again."""
+    import latentoc.gpdm.cache as cache
+
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    Y, settings = synthetic_motion(30, 5, seed=3, noise=0.05), GPDMSettings(latent_dim=2)
+    current = cache.model_path(Y, settings)
+    monkeypatch.setattr(cache, "LEARNER_VERSION", cache.LEARNER_VERSION - 1)
+    old = cache.model_path(Y, settings)
+    stale = learn_gpdm(Y, settings)
+    stale.X = stale.X + 1e-3  # what another learner might have returned: not this learner's minimum
+    old.parent.mkdir(parents=True)
+    stale.save(old)
+    monkeypatch.setattr(cache, "LEARNER_VERSION", cache.LEARNER_VERSION + 1)
+    assert old != current and cache.model_path(Y, settings) == current
+    model = cached_gpdm(Y, settings)
+    assert current.exists() and not np.allclose(model.X, stale.X)
+    np.testing.assert_array_equal(model.X, learn_gpdm(Y, settings).X)
+
+
 def test_a_damaged_file_is_learned_again(tmp_path, monkeypatch):
     monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
     Y, settings = synthetic_motion(30, 5, seed=3, noise=0.05), GPDMSettings(latent_dim=2)
