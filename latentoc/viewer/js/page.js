@@ -212,7 +212,7 @@
   if (!S.motions.initial) controls.ghost.parentElement.style.display = "none";
   if (!S.contacts) for (const k of ["forces", "cones", "polygon"]) controls[k].parentElement.style.display = "none";
   const hold = 0.5; // s on the last frame before the loop starts again
-  const clock = { playing: true, t: 0, wall: performance.now() };
+  const clock = { playing: true, t: 0, wall: performance.now(), played: 0, ticks: 0 }; // played: seconds, never wrapped
   const hash = /t=([0-9.]+)/.exec(window.location.hash);
   if (hash) { clock.playing = false; clock.t = Math.min(parseFloat(hash[1]), S.duration); }
   controls.slider.max = String(S.duration);
@@ -244,7 +244,9 @@
 
   function loop(now) {
     if (clock.playing) {
-      clock.t += (now - clock.wall) / 1000 * parseFloat(controls.speed.value);
+      const step = (now - clock.wall) / 1000 * parseFloat(controls.speed.value);
+      clock.t += step;
+      clock.played += step;
       if (clock.t > S.duration + hold) clock.t = 0;
     }
     clock.wall = now;
@@ -257,6 +259,8 @@
     renderer.render(scene, camera);
     document.body.dataset.frame = String(i);
     document.body.dataset.time = times[i].toFixed(3);
+    document.body.dataset.played = clock.played.toFixed(3);
+    document.body.dataset.ticks = String(++clock.ticks);
     requestAnimationFrame(loop);
   }
   requestAnimationFrame((now) => { clock.wall = now; loop(now); });
