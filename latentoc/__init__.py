@@ -14,10 +14,6 @@ Every error about the input is a :class:`LatentocError`.
 
 from .version import __version__
 
-# ``latentoc.sweep`` is the function below; its module stays importable by name
-# (``from latentoc.sweep import format_table``). The module is imported first, so the function
-# is bound last.
-from . import sweep as _sweep_module  # noqa: F401
 from .api import solve
 from .dynamics import SymbolicModel
 from .errors import LatentocError
@@ -26,7 +22,7 @@ from .problem import Problem
 from .problem_files import load_problem, problem_names
 from .results import Result, load_result
 from .robots import load_robot
-from .sweep import SweepResult, sweep
+from .tube_sweep import SweepResult, sweep
 
 __all__ = ["__version__", "load_problem", "problem_names", "Problem", "solve", "Result", "load_result", "sweep",
            "SweepResult", "learn_gpdm", "GPDM", "GPDMSettings", "load_robot", "SymbolicModel", "LatentocError"]

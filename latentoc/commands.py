@@ -207,7 +207,7 @@ def _executor(args: argparse.Namespace) -> Any:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from .problem_files import load_problem
-    from .sweep import format_table, sweep, write_sweep
+    from .tube_sweep import format_table, sweep, write_sweep
 
     problem = load_problem(args.problem, **overrides(args, "latent_dim", "hessian"))
     if args.tubes == [] or args.ranges == []:

@@ -98,7 +98,7 @@ def reproduce(quick: bool = False, arm: str = "arm-raise", jump: str = "broad-ju
     from .min_torque.training import problem_gpdm
     from .robots import load_robot
     from .start_poses import start_pose_distances
-    from .sweep import sweep
+    from .tube_sweep import sweep
     from .tube import resolve_tube
 
     out = Reproduction()

@@ -11,7 +11,7 @@ import pytest
 
 from latentoc import load_problem, load_result, sweep
 from latentoc.errors import SweepError
-from latentoc.sweep import SweepTask, format_table, run_task, write_sweep
+from latentoc.tube_sweep import SweepTask, format_table, run_task, write_sweep
 
 REPO = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.slow  # every test here solves

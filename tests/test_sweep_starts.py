@@ -9,7 +9,7 @@ from fake_solver import install, solution
 
 import latentoc
 from latentoc.cli import main
-from latentoc.sweep import format_table
+from latentoc.tube_sweep import format_table
 
 
 def _problem():

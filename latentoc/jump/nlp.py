@@ -95,8 +95,11 @@ def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
             "land": np.linspace(ph.touchdown, ph.duration, s.n_land)}
 
 
-def tube_times(settings: JumpSettings, phases: Phases) -> np.ndarray:
-    """The tube every ``tube_spacing`` inside the motion (its ends are the fixed end points)."""
+def tube_times(settings: JumpSettings, phases: Phases, layer: GPLayer | IdentityLayer) -> np.ndarray:
+    """The tube every ``tube_spacing`` inside the motion (its ends are the fixed end points); none on
+    a joint path, which has no GPDM variance."""
+    if not isinstance(layer, GPLayer):
+        return np.zeros(0)
     T = phases.duration
     return np.linspace(0.0, T, max(2, int(round(T / settings.tube_spacing)) + 1))[1:-1]
 
@@ -144,12 +147,10 @@ def build_nlp(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str
     grid = node_grid(s, ph)
     tc = np.concatenate([grid["stance"], grid["land"]])
     nC, nk = len(tc), len(robot.unmirrored)
-    tube = isinstance(layer, GPLayer)  # sigma^2 is the GPDM's: a joint path has no tube
-    sel = Selection.every_node_row(nC, nk, tube_times(s, ph) if tube else np.zeros(0)) if selection is None \
-        else selection
+    sel = Selection.every_node_row(nC, nk, tube_times(s, ph, layer)) if selection is None else selection
     if sel.node_torque.shape != (nC, nk):
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
-    if len(sel.tube) and not tube:
+    if len(sel.tube) and not isinstance(layer, GPLayer):
         raise ValueError("the selection has tube points but the layer has no sigma^2 (a joint path)")
     splines = (BSpline(s.n_control, T), BSpline(s.n_base_stance, ph.takeoff), BSpline(s.n_base_land, T - ph.touchdown))
     var = JumpVariables.layout(s.n_control, layer.latent_dim, s.n_base_stance, s.n_base_land, nC, len(grid["flight"]),

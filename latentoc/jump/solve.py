@@ -89,7 +89,7 @@ class _Solve:
         self.robot, self.layer, self.blocks, self.ph, self.s = robot, layer, blocks, phases, settings
         self.start, self.model, self.clock = start, model, _Clock()
         self.opts = ipopt_options(settings, verbose)
-        self.tube = tube_times(settings, phases) if isinstance(layer, GPLayer) else np.zeros(0)  # no tube on a joint path
+        self.tube = tube_times(settings, phases, layer)
         self.t0 = time.perf_counter()
         self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
 
