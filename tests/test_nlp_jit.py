@@ -86,3 +86,36 @@ def test_a_damaged_library_is_compiled_again_and_an_index_never_points_outside(t
     b = compile_blocks([_block("lc_damaged")])[0]
     assert all(jit.LIBRARY_NAME.fullmatch(n) for n in json.loads(index.read_text())["libraries"])
     np.testing.assert_allclose(np.asarray(b.functions["rows"](x, x, x, [0.5])), want, rtol=1e-14)
+
+
+@pytest.mark.slow  # fresh processes
+def test_processes_compiling_one_library_at_once_compile_it_once(tmp_path):
+    """Two processes that need the same library on an empty cache (a sweep's workers) run the
+    compiler once between them (counted by a wrapper around it); both get the library, and its
+    values are the SX Function's."""
+    import shutil
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    log = tmp_path / "calls"
+    wrapper = tmp_path / "cc"
+    wrapper.write_text(f"#!/bin/sh\necho x >> {log}\nsleep 2\nexec {cc} \"$@\"\n")  # slow: the two overlap
+    wrapper.chmod(0o755)
+    code = ("import sys, casadi as ca, numpy as np\n"
+            "from latentoc.nlp.jit import Compiler\n"
+            "x = ca.SX.sym('x', 3)\n"
+            "f = ca.Function('lc_twice', [x], [ca.sin(x) * ca.sumsqr(x)])\n"
+            "cg = ca.CodeGenerator('lc_twice.c'); cg.add(f)\n"
+            "with Compiler() as c: lib = c.submit('twice', cg.dump(), ('-O0',)).result()\n"
+            "g = ca.external('lc_twice', str(lib))\n"
+            "v = np.array([0.3, -1.2, 2.0])\n"
+            "print(lib.name, float(np.max(np.abs(np.asarray(g(v)) - np.asarray(f(v))))))\n")
+    env = {**os.environ, "LATENTOC_CACHE": str(tmp_path / "cache"), "CC": str(wrapper), "LATENTOC_JIT": "1"}
+    runs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True) for _ in range(2)]
+    outs = [r.communicate(timeout=120) for r in runs]
+    assert all(r.returncode == 0 for r in runs), [o[1][-1000:] for o in outs]
+    names, errors = zip(*(o[0].split() for o in outs))
+    assert names[0] == names[1] and max(map(float, errors)) < 1e-12
+    assert log.read_text().count("x") == 1

@@ -4,7 +4,8 @@ Libraries are cached under ``$LATENTOC_CACHE`` (else ``$XDG_CACHE_HOME/latentoc/
 ``~/.cache/latentoc/jit``) by a hash of their C source, the compiler, the flags and CasADi's
 version, written atomically with their SHA-256 beside them and verified before they are loaded
 (:func:`cached_library`), so only the first build on a machine compiles and a damaged file is
-compiled again. Without a
+compiled again. Processes that need the same library at once (a sweep's workers on an empty
+cache) take a lock file beside it: one compiles, the others wait and load its library. Without a
 compiler (warning) or with ``LATENTOC_JIT=0`` the Functions stay in CasADi's virtual machine.
 """
 from __future__ import annotations
@@ -16,7 +17,9 @@ import shutil
 import subprocess
 import tempfile
 import warnings
+from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 
 import casadi as ca
@@ -112,6 +115,22 @@ def cached_library(name: str) -> Path | None:
     return None
 
 
+@contextmanager
+def _locked(lib: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``lib``'s lock file (POSIX ``flock``; no lock where there is none)."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: two processes may compile the same library (renames stay atomic)
+        yield
+        return
+    with open(lib.with_name(lib.name + ".lock"), "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
 class Compiler:
     """Compiles C sources to shared libraries in the background, ``workers`` at a time, while the
     caller generates the next ones; a library already in the cache is not compiled again.
@@ -153,7 +172,9 @@ class Compiler:
         cache = cache_dir()
         try:
             cache.mkdir(parents=True, exist_ok=True)
-            with tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
+            with _locked(lib), tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
+                if cached_library(lib.name) is not None:  # another process compiled it while we waited
+                    return lib
                 c_file, so_file = Path(tmp) / f"{lib.stem}.c", Path(tmp) / lib.name
                 c_file.write_text(source)
                 assert self.cc is not None  # submit() compiles nothing without one
