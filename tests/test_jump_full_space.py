@@ -10,14 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
-
-H = 1e-4  # fourth-order central differences
-
-
-def _csc(sparsity, values):
-    return sp.csc_matrix((values, np.array(sparsity.row()), np.array(sparsity.colind())),
-                         shape=(sparsity.size1(), sparsity.size2())).toarray()
+from finite_differences import central4, dense
 
 
 @pytest.fixture(scope="module")
@@ -55,10 +48,6 @@ def _directions(nlp, n_random, seed):
         [np.eye(var.n)[var.slices[name].start] for name in ("P", "base_stance", "base_land", "lam", "L_to")]
 
 
-def _fd(fun, x, dv):
-    return (8 * (fun(x + H * dv) - fun(x - H * dv)) - (fun(x + 2 * H * dv) - fun(x - 2 * H * dv))) / (12 * H)
-
-
 @pytest.mark.slow  # ~1 min with LATENTOC_JIT=0: the 37-joint blocks' SX derivatives are built here
 def test_full_space_jacobian_and_hessian_match_central_differences(full_jump):
     """At a point near the start (random multipliers): J v against central differences of the
@@ -69,20 +58,20 @@ def test_full_space_jacobian_and_hessian_match_central_differences(full_jump):
     rng = np.random.default_rng(21)
     x = x0 + 0.01 * rng.standard_normal(x0.size) * np.maximum(1.0, np.abs(x0))
     sigma, lam = 0.7, rng.standard_normal(nlp.m)
-    J = _csc(nlp.jac_sparsity, nlp.jacobian(x))
-    Hu = _csc(nlp.hess_sparsity, nlp.hessian(x, sigma, lam))
+    J = dense(nlp.jac_sparsity, nlp.jacobian(x))
+    Hu = dense(nlp.hess_sparsity, nlp.hessian(x, sigma, lam))
     assert np.allclose(np.tril(Hu, -1), 0.0)
     Hl = Hu + Hu.T - np.diag(np.diag(Hu))
 
     def grad_lagrangian(v):
-        return sigma * nlp.gradient(v) + _csc(nlp.jac_sparsity, nlp.jacobian(v)).T @ lam
+        return sigma * nlp.gradient(v) + dense(nlp.jac_sparsity, nlp.jacobian(v)).T @ lam
 
     for dv in _directions(jn, 2, 22):
         scale = np.maximum(1.0, np.abs(J) @ np.abs(dv))
-        assert np.max(np.abs(_fd(nlp.constraints, x, dv) - J @ dv) / scale) < 1e-7
-        assert abs(_fd(nlp.objective, x, dv) - nlp.gradient(x) @ dv) < 1e-7
+        assert np.max(np.abs(central4(nlp.constraints, x, dv) - J @ dv) / scale) < 1e-7
+        assert abs(central4(nlp.objective, x, dv) - nlp.gradient(x) @ dv) < 1e-7
         scale = np.maximum(1.0, np.abs(Hl) @ np.abs(dv))
-        assert np.max(np.abs(_fd(grad_lagrangian, x, dv) - Hl @ dv) / scale) < 3e-8
+        assert np.max(np.abs(central4(grad_lagrangian, x, dv) - Hl @ dv) / scale) < 3e-8
     # every row family has entries; the joints' control points enter the rows
     for name in set(jn.row_names):
         assert np.abs(J[jn.row_names == name]).max() > 0, name

@@ -10,14 +10,9 @@ its own scale, so a small row family's error is not hidden by a large one's.
 """
 import numpy as np
 import pytest
-import scipy.sparse as sp
+from finite_differences import central4, dense
 
 H_FD = 1e-6
-
-
-def _csc(sparsity, values):
-    return sp.csc_matrix((values, np.array(sparsity.row()), np.array(sparsity.colind())),
-                         shape=(sparsity.size1(), sparsity.size2())).toarray()
 
 
 def _points(sj):
@@ -39,7 +34,7 @@ def test_jacobian_and_gradient_match_central_differences(point):
     against central differences of the objective."""
     sj, x, _, _ = point
     nlp = sj.nlp.nlp
-    J = _csc(nlp.jac_sparsity, nlp.jacobian(x))
+    J = dense(nlp.jac_sparsity, nlp.jacobian(x))
     grad = nlp.gradient(x)
     assert J.shape == (nlp.m, x.size)
     fd, fd_grad = np.empty_like(J), np.empty_like(grad)
@@ -68,26 +63,24 @@ def test_exact_hessian_matches_central_differences_of_the_lagrangian_gradient(po
     central differences)."""
     sj, x, sigma, lam = point
     nlp, var = sj.nlp.nlp, sj.nlp.variables
-    Hu = _csc(nlp.hess_sparsity, nlp.hessian(x, sigma, lam))
+    Hu = dense(nlp.hess_sparsity, nlp.hessian(x, sigma, lam))
     assert np.allclose(np.tril(Hu, -1), 0.0)
     H = Hu + Hu.T - np.diag(np.diag(Hu))
 
     def grad_lagrangian(v):
-        return sigma * nlp.gradient(v) + _csc(nlp.jac_sparsity, nlp.jacobian(v)).T @ lam
+        return sigma * nlp.gradient(v) + dense(nlp.jac_sparsity, nlp.jacobian(v)).T @ lam
 
     rng = np.random.default_rng(12)
     directions = [rng.standard_normal(x.size) for _ in range(4)]
     directions += [np.eye(x.size)[var.slices[name].start] for name in var.shapes]
-    h = 1e-4  # fourth-order central differences: rounding, not truncation, at 1e-6
     for dv in directions:
-        fd = (8 * (grad_lagrangian(x + h * dv) - grad_lagrangian(x - h * dv))
-              - (grad_lagrangian(x + 2 * h * dv) - grad_lagrangian(x - 2 * h * dv))) / (12 * h)
+        fd = central4(grad_lagrangian, x, dv, h=1e-4)
         an = H @ dv
         scale = np.maximum(1.0, np.abs(H) @ np.abs(dv))
         assert np.max(np.abs(fd - an) / scale) < 3e-8
     # the objective's and the rows' parts separately: sigma alone, then the multipliers alone
-    H_f = _csc(nlp.hess_sparsity, nlp.hessian(x, sigma, np.zeros(nlp.m)))
-    H_g = _csc(nlp.hess_sparsity, nlp.hessian(x, 0.0, lam))
+    H_f = dense(nlp.hess_sparsity, nlp.hessian(x, sigma, np.zeros(nlp.m)))
+    H_g = dense(nlp.hess_sparsity, nlp.hessian(x, 0.0, lam))
     np.testing.assert_allclose(H_f + H_g, Hu, atol=1e-9 * max(1.0, np.abs(Hu).max()))
 
 
