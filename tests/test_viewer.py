@@ -166,8 +166,8 @@ def test_the_page_draws_the_robot_and_animates_in_a_browser(pages, name, tmp_pat
     if chromium() is None:
         pytest.skip("no chromium on this machine (apt-get install chromium; .ci/run installs it)")
     page, empty = pages[name]
-    # playing: the clock has moved on. Virtual time is not exact (a 1300 ms budget played 1.3-9.7 s of
-    # motion here), and the motion loops back to t = 0, so the played time that never wraps is checked
+    # playing: the clock has moved on. Virtual time is not exact and the motion loops back to t = 0,
+    # so the played time, which never wraps, is checked
     html = dom(page, 1300)
     assert "data-error" not in html, "the script failed"
     assert re.search(r'<div id="status"></div>', html)  # "loading..." cleared at the end of the script
