@@ -1,4 +1,4 @@
-"""Command line: ``python -m latentoc {list,show,learn,solve,plot,view,sweep,start-poses,reproduce,bench} ...``.
+"""Command line: ``python -m latentoc {list,show,learn,solve,plot,view,sweep,start-poses,reproduce,bench,simulate} ...``.
 
 Input errors (:class:`latentoc.LatentocError`: bad problem, infeasible tube, an ``--out`` that
 cannot be written, ...) print ``latentoc: error: <message>`` and exit with code 2 without
@@ -7,7 +7,8 @@ solve that Ipopt does not finish successfully exits with code 1 and writes nothi
 ``--keep-failed``; a sweep with failed or unsuccessful tasks writes the others and exits with
 code 1. Ctrl-C prints ``latentoc: interrupted`` and exits with code 130, writing no result of the
 interrupted solve; a closed stdout (``latentoc list | head``) ends quietly with code 141.
-This module parses the command line; each command is :mod:`latentoc.commands`' ``cmd_<name>``.
+This module parses the command line; each command is :mod:`latentoc.commands`' ``cmd_<name>``
+(``simulate``: :func:`latentoc.simulate.command.cmd_simulate`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import Any
 from . import commands
 from .errors import LatentocError
 from .kinds import KINDS
+from .simulate import command as simulate
 
 __all__ = ["main"]
 
@@ -141,14 +143,30 @@ def _bench_arguments(sub: Any) -> None:
     b.add_argument("rest", nargs=argparse.REMAINDER)
 
 
+def _simulate_arguments(sub: Any) -> None:
+    """The ``simulate`` command's arguments."""
+    sm = sub.add_parser("simulate", help="replay a result's torques in MuJoCo: simulation.json, simulation.npz")
+    sm.add_argument("result", type=Path, help="a result folder with foot contacts (result.json, trajectory.npz)")
+    sm.add_argument("--kp", type=float, default=simulate.DEFAULT_KP,
+                    help=f"joint stiffness tracking the plan, N m/rad, every joint (default {simulate.DEFAULT_KP:g})")
+    sm.add_argument("--kd", type=float, default=None,
+                    help="joint damping, N m s/rad, every joint (default: critical, 2 sqrt(kp I) per joint)")
+    sm.add_argument("--out", type=Path, default=None, help="output folder (default: RESULT)")
+    sm.add_argument("--sweep-gains", type=float, nargs="+", default=None, metavar="KP",
+                    help="also replay at each of these kp and report which stay upright")
+    sm.add_argument("--quiet", action="store_true", help="no progress display")
+
+
 _ARGUMENTS = (_solve_arguments, _learn_arguments, _plot_arguments, _view_arguments, _notebooks_arguments,
-              _list_arguments, _sweep_arguments, _start_poses_arguments, _reproduce_arguments, _bench_arguments)
+              _list_arguments, _sweep_arguments, _start_poses_arguments, _reproduce_arguments, _bench_arguments,
+              _simulate_arguments)
 
 #: command name -> its implementation (:mod:`latentoc.commands`)
 COMMANDS = {"plot": commands.cmd_plot, "view": commands.cmd_view, "notebooks": commands.cmd_notebooks,
             "list": commands.cmd_list, "show": commands.cmd_show, "learn": commands.cmd_learn,
             "solve": commands.cmd_solve, "sweep": commands.cmd_sweep, "reproduce": commands.cmd_reproduce,
-            "start-poses": commands.cmd_start_poses, "bench": commands.cmd_bench}
+            "start-poses": commands.cmd_start_poses, "bench": commands.cmd_bench,
+            "simulate": simulate.cmd_simulate}
 
 
 def _parser() -> argparse.ArgumentParser:

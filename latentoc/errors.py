@@ -10,6 +10,7 @@ The tree (the domain errors live beside the code that raises them)::
     ├── ResultFileError     a result folder that cannot be read (latentoc.results)
     ├── OutputError         an output folder that cannot be written (latentoc.files)
     ├── SweepError          a sweep's tubes, workers or failed tasks (latentoc.sweep)
+    ├── SimulationError     a replay's settings, or a model or result MuJoCo cannot replay (latentoc.simulate)
     ├── GPDMInputError      training data or GPDM settings (latentoc.gpdm)
     ├── MocapFormatError    a malformed ASF/AMC file (latentoc.mocap)
     ├── UnknownRobotError   a robot name (latentoc.robots)
@@ -20,7 +21,7 @@ from :class:`LookupError`), so ``except ValueError`` around a call keeps working
 """
 from __future__ import annotations
 
-__all__ = ["LatentocError", "ProblemError", "SolveError", "ResultFileError", "SweepError"]
+__all__ = ["LatentocError", "ProblemError", "SolveError", "ResultFileError", "SweepError", "SimulationError"]
 
 
 class LatentocError(Exception):
@@ -41,3 +42,7 @@ class ResultFileError(LatentocError, ValueError):
 
 class SweepError(LatentocError):
     """A sweep that cannot run (no Dask installed, no scheduler) or whose tasks failed."""
+
+
+class SimulationError(LatentocError, ValueError):
+    """A physics replay that cannot run: its gains or settings, or a model or result it cannot take."""
