@@ -9,6 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from PIL import Image
+from gif_pixels import colour_pixels
 
 from latentoc.plots import animation
 from latentoc.robots.human_arm import arm_trial, build_human_arm
@@ -61,18 +62,10 @@ def test_gif_shows_the_initial_motion(tmp_path):
     t, Q = t[:61], Q[:61]
     grey = np.array([0xb3, 0xb3, 0xb3])
 
-    def ghost_pixels(path):
-        with Image.open(path) as im:
-            counts = []
-            for k in range(im.n_frames):
-                im.seek(k)
-                rgb = np.asarray(im.convert("RGB")).astype(int)
-                counts.append(int(np.sum(np.all(np.abs(rgb - grey) <= 6, axis=2))))
-        return counts
 
     with_ghost = animation.animate(model, t, Q, tmp_path / "a.gif", fps=10, plane="yz", initial=Q[::-1].copy())
     without = animation.animate(model, t, Q, tmp_path / "b.gif", fps=10, plane="yz")
-    assert min(ghost_pixels(with_ghost)) > max(ghost_pixels(without)) + 300
+    assert min(colour_pixels(with_ghost, grey)) > max(colour_pixels(without, grey)) + 300
 
 
 def test_animate_checks_lengths(tmp_path):

@@ -9,7 +9,8 @@ import pinocchio as pin
 import pytest
 from matplotlib.figure import Figure
 from PIL import Image
-from result_factory import make_result
+from gif_pixels import colour_pixels
+from result_factory import jump_trajectory, make_jump_result, make_result
 
 from latentoc import plots
 from latentoc.gpdm import GPDMSettings, learn_gpdm
@@ -230,9 +231,9 @@ def test_contact_series_of_a_static_stance():
     assert np.allclose(s["friction_ratio"], 20.0 / 300.0) and np.allclose(s["normal"], 300.0)
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
-    toe = data.oMf[model.getFrameId("ltoes_end")].translation
+    toe = data.oMf[model.getFrameId("ltoes_end")].translation  # an older result: no toe_offset, the toe tip
     heel = data.oMf[model.getFrameId("lfoot")].act(traj["heel_offset"])
-    cop = toe[0] - 6.0 / 300.0
+    cop = toe[0] - (6.0 + toe[2] * 20.0) / 300.0  # on the ground below the wrench's point
     assert np.allclose(s["cop_margin"], min(cop - heel[0], toe[0] - cop))
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     assert plots.polygon_margin(square, np.array([0.25, 0.5])) == pytest.approx(0.25)
@@ -259,6 +260,49 @@ def test_contact_series_agrees_with_the_jumps_own_check(small_export, small_jump
     com = np.nanmin(theirs["com"], axis=1)
     on = np.isfinite(com)
     assert np.array_equal(on, ours["com_enforced"]) and np.allclose(ours["com_margin"][on], com[on], atol=1e-3)
+
+
+def test_every_contact_point_of_the_jump_is_drawn(tmp_path):
+    """A broad jump in the export's format (four points per foot): the series and both contact
+    figures carry each point's force and friction ratio by name; the support polygon's corners are
+    the heels and toe points where the jump's own code puts them; the centre of pressure is the
+    wrench's, between heel and toe point."""
+    from latentoc.jump.contact import FootGeometry, foot_points
+
+    model, traj = jump_trajectory()
+    s = plots.contact_series(model, traj)
+    names = ["heel", "ball", "toe", "pad"]
+    assert s["point_names"] == names and s["point_ratio"].shape == (len(traj["t"]), 4)
+    F = traj["point_forces"]
+    weight = sum(i.mass for i in model.inertias) * 9.81
+    shown = traj["contact"].astype(bool)[:, None] & (F[..., 1] > 1e-3 * weight)
+    assert shown.all(axis=0).sum() == 0 and shown.any(axis=0).all()  # each point loaded at some time, not always
+    assert np.array_equal(np.isfinite(s["point_ratio"]), shown)
+    assert np.allclose(s["point_ratio"][shown], np.abs(F[..., 0])[shown] / F[..., 1][shown])
+    geom = FootGeometry(traj["heel_offset"], traj["pad_offset"], traj["toe_offset"])
+    data = model.createData()
+    for i in range(0, len(traj["t"]), 20):
+        pin.framesForwardKinematics(model, data, traj["q"][i])
+        heel, _, toe, _ = foot_points(model, data, geom).T
+        ends = np.array([heel, toe, heel * [1, -1, 1], toe * [1, -1, 1]])[:, :2]
+        assert np.allclose(np.sort(s["polygon"][i], axis=0), np.sort(ends, axis=0), atol=1e-12)
+        fx, _, fz, _, my, _ = traj["wrench"][i]
+        if traj["contact"][i] and fz > 0:
+            cop = toe[0] - (my + toe[2] * fx) / fz
+            assert np.isclose(s["cop_margin"][i], min(cop - heel[0], toe[0] - cop))
+        else:
+            assert np.isnan(s["cop_margin"][i])
+    fig = plots.plot_contact_forces(traj["t"], traj["wrench"], traj["contact"], F, point_names=names)
+    normal, tangential = fig.axes[:2]
+    on = traj["contact"].astype(bool)
+    for k, name in enumerate(names):
+        line = [ln for ln in normal.get_lines() if ln.get_label() == name][0]
+        assert np.allclose(line.get_ydata()[on], F[on, k, 1])
+        line = [ln for ln in tangential.get_lines() if ln.get_label() == f"$f_x$, {name}"][0]
+        assert np.allclose(line.get_ydata()[on], F[on, k, 0])
+    fig = plots.plot_contact_margins(traj["t"], s, 0.4)
+    assert [ln.get_label() for ln in fig.axes[0].get_lines()][1:5] == names
+    check_png(plots.save(fig, tmp_path / "m.png"), "contact_margins")
 
 
 def test_contact_forces_zmp_gain(tmp_path):
@@ -322,24 +366,30 @@ def test_plot_solution_arm(arm, gpdm3, tmp_path, fmt="png"):
 
 @pytest.mark.slow  # the humanoid's frames and animation
 def test_plot_solution_jump_format(tmp_path):
-    """A broad-jump result (actuated tau, one wrench per foot, touchdown, heel offset, no v limits): the
-    contact figures are derived; the training jump at its own frame rate gives the stick frames' ghost."""
-    from latentoc.robots.human_models import broad_jump_training_motion, build_cmu_humanoid
+    """A broad-jump result in the export's format (actuated tau, toe-point wrench, four points' forces,
+    q_initial: the training jump on the result's grid): every figure, the contact figures with each
+    point; the GIF of the floating-base robot shows the training jump's ghost."""
+    from latentoc.plots.animation import GHOST_COLOUR, animate
 
-    model = build_cmu_humanoid()
-    tj, Qj = broad_jump_training_motion()
-    t, Q = tj[::8], Qj[::8]
-    n = len(t)
-    wrench = np.zeros((n, 6))
-    wrench[:, 2] = 300.0
-    traj = {"t": t, "q": Q, "tau": np.zeros((n, model.nv - 6)), "wrench": wrench, "contact": np.ones(n, np.int8),
-            "touchdown": np.float64(t[n // 2]), "settle": np.float64(t[-3]), "heel_offset": np.array([-0.05, 0.0, 0.0]),
-            "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
-            "friction": np.float64(0.4), "tau_min": -np.ones(model.nv - 6), "tau_max": np.ones(model.nv - 6),
-            "q_initial": Qj}
-    make_result(model, n, tube=None, trajectory=traj).save(tmp_path)
+    r = make_jump_result(stride=2)
+    r.save(tmp_path)
     paths = {p.name: p for p in plots.plot_solution(tmp_path, gif=True)}
     assert set(paths) == {"joint_angles.png", "joint_velocities.png", "torques.png", "stick_frames.png",
                           "contact_forces.png", "contact_margins.png", "zmp_com.png", "motion.gif"}
     check_png(paths["stick_frames.png"], "stick_frames", rows=2)
     check_png(paths["contact_margins.png"], "contact_margins")
+    check_png(paths["contact_forces.png"], "contact_forces")
+    figs = plots.solution_figures(r)
+    labels = [ln.get_label() for ln in figs["contact_forces"].axes[0].get_lines()]
+    assert all(name in labels for name in ("heel", "ball", "toe", "pad"))
+    assert len(figs["joint_angles"].axes[0].get_lines()) >= 2  # the initial and the optimised motion
+    grey = np.array([int(GHOST_COLOUR[k:k + 2], 16) for k in (1, 3, 5)])
+
+
+    traj = r.trajectory
+    model = plots.model_of(traj)
+    alone = animate(model, traj["t"], traj["q"], tmp_path / "alone.gif", fps=20, plane="xz")
+    more = np.array(colour_pixels(paths["motion.gif"], grey)) - np.array(colour_pixels(alone, grey))
+    apart = np.arange(len(more)) / 20.0 > float(traj["takeoff"]) + 0.1  # the optimised jump has left the ghost
+    assert more.min() > 100  # the ghost's tip trace, its figure hidden under the same stance
+    assert apart.sum() > 10 and more[apart].min() > 1000

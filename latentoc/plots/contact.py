@@ -1,26 +1,34 @@
 """The broad jump's contact constraints over time, from the result schema alone.
 
-From ``trajectory.npz`` (t, q, v, a, the per-foot toe-tip ``wrench``, ``contact``, ``touchdown``,
-``settle``, ``heel_offset``, ``contact_frames``, ``friction``, optionally ``point_forces``)
+From ``trajectory.npz`` (t, q, v, a, the per-foot ``wrench`` at the toe point, ``contact``,
+``touchdown``, ``settle``, the contact points (:mod:`.feet`: ``contact_points``,
+``contact_frames``, the ``*_offset`` arrays), ``friction``, optionally ``point_forces``)
 :func:`contact_series` computes with numeric Pinocchio what the solver held: the normal force, the
-friction ratio against mu (the cone), the centre of pressure inside the foot (heel to toe tip),
-the ZMP (from the centroidal momentum rate) and the ground-projected COM inside the support
-polygon of both feet (heel and toe tip of each), with the windows where each is enforced (ZMP:
-landing; COM: once settled). A margin is the distance inside its region (negative: outside).
+friction ratio against mu (the cone), each point's, the centre of pressure inside the foot (heel to
+toe point), the ZMP (from the centroidal momentum rate) and the ground-projected COM inside the
+support polygon of both feet (the convex hull of each foot's heel and toe point, or of all its
+points where it names no heel and toe), with the windows where each is enforced (ZMP: landing;
+COM: once settled). A margin is the distance inside its region (negative: outside).
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
+from scipy.spatial import ConvexHull, QhullError
 
 from ..support_polygon import margin, support_polygon
+from .feet import ContactPoints, contact_points_of
 from .figure import LIMIT_STYLE, new_figure, panel_axes
 
-__all__ = ["contact_series", "polygon_margin", "plot_contact_forces", "plot_contact_margins", "plot_zmp_com"]
+POINT_COLOURS = ("C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9")  # no red: the limits' colour
+RATIO_LOAD = 1e-3  # body weights: a point's friction ratio is drawn where its f_z is above this
+
+__all__ = ["contact_series", "polygon_margin", "support_vertices", "plot_contact_forces", "plot_contact_margins",
+           "plot_zmp_com"]
 
 
 def polygon_margin(polygon: np.ndarray, p: np.ndarray) -> float:
@@ -28,37 +36,51 @@ def polygon_margin(polygon: np.ndarray, p: np.ndarray) -> float:
     return margin(*support_polygon(polygon), p)
 
 
-def _feet(model: pin.Model, data: pin.Data, frames: list[str], heel_offset: np.ndarray) -> np.ndarray:
-    """World (heel, toe tip) of the left then the right foot (4, 3) after framesForwardKinematics."""
-    out = []
-    for foot, toe in ((frames[0], frames[2]), (frames[3], frames[5])):
-        M = data.oMf[model.getFrameId(foot)]
-        out += [M.translation + M.rotation @ heel_offset, data.oMf[model.getFrameId(toe)].translation.copy()]
-    return np.array(out)
+def _polygon_points(points: ContactPoints) -> list[int]:
+    """Indices (among both feet's 2 k points) of the support polygon's corners: each foot's heel
+    and toe point as the solver's polygon (:func:`latentoc.support_polygon.feet_polygon`), else all."""
+    heel, toe = points.index("heel"), points.index("toe")
+    ends = [heel, toe] if heel is not None and toe is not None else list(range(points.k))
+    return [side * points.k + j for side in range(2) for j in ends]
 
 
-def contact_series(model: pin.Model, traj: Mapping[str, Any]) -> dict[str, np.ndarray]:
+def support_vertices(P: np.ndarray, count: int) -> np.ndarray:
+    """The convex hull (counter-clockwise, x y) of ground points P (m, 2 or 3), its last vertex
+    repeated up to ``count`` vertices (a fixed size for every sample); P itself if it has no area."""
+    xy = np.asarray(P, dtype=float)[:, :2]
+    try:
+        V = xy[ConvexHull(xy).vertices]
+    except (QhullError, ValueError):
+        V = xy
+    return np.vstack([V, np.repeat(V[-1:], count - len(V), axis=0)])[:count]
+
+
+def contact_series(model: pin.Model, traj: Mapping[str, Any]) -> dict[str, Any]:
     """Per sample (NaN where it does not apply): ``normal`` (N, per foot), ``friction_ratio``
-    (|f_xy| / f_z), ``point_ratio`` (n, 3: heel, ball, toe |f_x| / f_z), ``cop_margin`` (m),
-    ``zmp`` (n, 2), ``com`` (n, 3), ``zmp_margin``, ``com_margin`` (m), ``polygon`` (n, 4, 2: both
-    feet's heel and toe tip), and the masks ``contact``, ``zmp_enforced``, ``com_enforced``."""
+    (|f_xy| / f_z), ``point_ratio`` (n, k: each point's tangential / normal force where it
+    carries more than ``RATIO_LOAD`` body weights, named by ``point_names``), ``cop_margin`` (m),
+    ``zmp`` (n, 2), ``com`` (n, 3), ``zmp_margin``, ``com_margin`` (m), ``polygon`` (n, corners, 2:
+    the support polygon, module doc), ``points`` (n, 2 k, 3: both feet's contact points), and the
+    masks ``contact``, ``zmp_enforced``, ``com_enforced``."""
     t, Q, V, A = (np.asarray(traj[k], dtype=float) for k in ("t", "q", "v", "a"))
     W = np.asarray(traj["wrench"], dtype=float)
     contact = np.asarray(traj["contact"]).astype(bool)
-    frames = [str(f) for f in np.asarray(traj["contact_frames"])]
-    heel_offset = np.asarray(traj["heel_offset"], dtype=float)
+    feet = contact_points_of(model, traj)
+    k = feet.k
+    corners = _polygon_points(feet)
+    back, front = feet.index("heel"), feet.index("toe")  # the wrench acts at the toe point
     n = len(t)
+    P = feet.positions(model, Q)
     data = model.createData()
     mass = sum(i.mass for i in model.inertias)
     g = float(-model.gravity.linear[2])
     nan = np.full(n, np.nan)
-    out = {"normal": nan.copy(), "friction_ratio": nan.copy(), "cop_margin": nan.copy(), "zmp_margin": nan.copy(),
-           "com_margin": nan.copy(), "zmp": np.full((n, 2), np.nan), "com": np.zeros((n, 3)),
-           "polygon": np.zeros((n, 4, 2)), "point_ratio": np.full((n, 3), np.nan)}
+    out: dict[str, Any] = {
+        "normal": nan.copy(), "friction_ratio": nan.copy(), "cop_margin": nan.copy(), "zmp_margin": nan.copy(),
+        "com_margin": nan.copy(), "zmp": np.full((n, 2), np.nan), "com": np.zeros((n, 3)),
+        "polygon": np.array([support_vertices(P[i, corners], len(corners)) for i in range(n)]),
+        "point_ratio": np.full((n, k), np.nan), "point_names": list(feet.names), "points": P}
     for i in range(n):
-        pin.framesForwardKinematics(model, data, Q[i])
-        feet = _feet(model, data, frames, heel_offset)
-        out["polygon"][i] = feet[[0, 1, 3, 2], :2]  # left heel, left toe, right toe, right heel
         c = pin.centerOfMass(model, data, Q[i])
         out["com"][i] = c
         if not contact[i]:
@@ -67,17 +89,21 @@ def contact_series(model: pin.Model, traj: Mapping[str, Any]) -> dict[str, np.nd
         out["normal"][i] = fz
         if fz > 0:
             out["friction_ratio"][i] = np.hypot(fx, fy) / fz
-            cop = feet[1, 0] - my / fz  # the wrench acts at the toe tip: my = -(cop - toe) fz
-            out["cop_margin"][i] = min(cop - feet[0, 0], feet[1, 0] - cop)
+            x = P[i, :k, 0]
+            toe = P[i, front] if front is not None else P[i, int(np.argmax(x))]
+            heel_x = x[back] if back is not None else x.min()
+            cop = toe[0] - (my + toe[2] * fx) / fz  # on the ground: my = -(cop - toe_x) fz - toe_z fx
+            out["cop_margin"][i] = min(cop - heel_x, toe[0] - cop)
         dh = pin.computeCentroidalMomentumTimeVariation(model, data, Q[i], V[i], A[i]).vector
         fz_total = dh[2] + mass * g  # the ZMP on z = 0 (Kajita et al. 2014, Sect. 3.3)
         out["zmp"][i] = (c[0] - (c[2] * dh[0] + dh[4]) / fz_total, c[1] - (c[2] * dh[1] - dh[3]) / fz_total)
         out["zmp_margin"][i] = polygon_margin(out["polygon"][i], out["zmp"][i])
         out["com_margin"][i] = polygon_margin(out["polygon"][i], c)
     if "point_forces" in traj:
-        F = np.asarray(traj["point_forces"], dtype=float)  # (n, 3, 2): (f_x, f_z) of heel, ball, toe
-        with np.errstate(divide="ignore", invalid="ignore"):
-            out["point_ratio"] = np.where(contact[:, None] & (F[:, :, 1] > 0), np.abs(F[:, :, 0]) / F[:, :, 1], np.nan)
+        F = np.asarray(traj["point_forces"], dtype=float)  # (n, k, 2): the left foot's (f_x, f_z) per point
+        ft, fn = (np.hypot(F[..., 0], F[..., 1]), F[..., 2]) if F.shape[2] == 3 else (np.abs(F[..., 0]), F[..., 1])
+        with np.errstate(divide="ignore", invalid="ignore"):  # the ratio of a vanishing force is noise
+            out["point_ratio"] = np.where(contact[:, None] & (fn > RATIO_LOAD * mass * g), ft / fn, np.nan)
     out["contact"] = contact
     out["zmp_enforced"] = contact & (t >= float(traj["touchdown"]) - 1e-9)
     out["com_enforced"] = contact & (t >= float(traj.get("settle", traj["touchdown"])) - 1e-9)
@@ -91,44 +117,59 @@ def _shade(ax: Any, t: np.ndarray, mask: np.ndarray, label: str | None) -> None:
         ax.axvspan(t[a], t[b - 1], color="0.85", zorder=0, label=label if k == 0 else None)
 
 
+def _point_names(names: Sequence[str] | None, k: int) -> list[str]:
+    """The k points' names (``names``, else point 1, ...)."""
+    names = list(names) if names is not None else []
+    if len(names) != k:
+        names = [f"point {j + 1}" for j in range(k)]
+    return names
+
+
 def plot_contact_forces(t: np.ndarray, wrench: np.ndarray, contact: np.ndarray,
-                        point_forces: np.ndarray | None = None, axes: Any = None) -> Figure:
-    """Each foot's contact force at the toe tip (world frame): normal f_z and tangential f_x, and
-    with ``point_forces`` (n, 3, 2) the heel, ball and toe normal forces."""
+                        point_forces: np.ndarray | None = None, axes: Any = None,
+                        point_names: Sequence[str] | None = None) -> Figure:
+    """Each foot's contact force at its toe point (world frame): normal f_z and tangential f_x,
+    f_y, and with ``point_forces`` (n, k, 2: (f_x, f_z) of one foot's k points, named by
+    ``point_names``) every point's normal and tangential force."""
     fig, (ax1, ax2) = panel_axes(axes, "contact_forces", 2, ncols=1)
     t, W = np.asarray(t, dtype=float), np.asarray(wrench, dtype=float)
     on = np.asarray(contact).astype(bool)
     ax1.plot(t, np.where(on, W[:, 2], np.nan), "k-", lw=1.8, label="each foot")
+    ax2.plot(t, np.where(on, W[:, 0], np.nan), "k-", lw=1.5, label="$f_x$, each foot")
+    ax2.plot(t, np.where(on, W[:, 1], np.nan), "-", color="0.55", lw=1, label="$f_y$, each foot")
     if point_forces is not None:
         F = np.asarray(point_forces, dtype=float)
-        for k, name in enumerate(("heel", "ball", "toe")):
-            ax1.plot(t, np.where(on, F[:, k, 1], np.nan), lw=1, label=name)
+        fx, fz = F[..., 0], F[..., -1]
+        for k, name in enumerate(_point_names(point_names, F.shape[1])):
+            colour = POINT_COLOURS[k % len(POINT_COLOURS)]
+            ax1.plot(t, np.where(on, fz[:, k], np.nan), lw=1, color=colour, label=name)
+            ax2.plot(t, np.where(on, fx[:, k], np.nan), lw=0.9, color=colour, label=f"$f_x$, {name}")
     ax1.axhline(0.0, label="limit $f_z \\geq 0$", **LIMIT_STYLE)
-    ax2.plot(t, np.where(on, W[:, 0], np.nan), "k-", lw=1.5, label="$f_x$")
-    ax2.plot(t, np.where(on, W[:, 1], np.nan), "-", color="C2", lw=1, label="$f_y$")
     ax1.set_ylabel("normal force $f_z$ [N]")
     ax2.set_ylabel("tangential force [N]")
     ax2.set_xlabel("t [s]")
-    ax1.legend(fontsize=7, ncol=2)
-    ax2.legend(fontsize=7)
+    ax1.legend(fontsize=7, ncol=3)
+    ax2.legend(fontsize=7, ncol=3)
     if axes is None:
         fig.subplots_adjust(left=0.1, right=0.97, bottom=0.09, top=0.97, hspace=0.12)
     return fig
 
 
-def plot_contact_margins(t: np.ndarray, series: Mapping[str, np.ndarray], friction: float,
+def plot_contact_margins(t: np.ndarray, series: Mapping[str, Any], friction: float,
                          axes: Any = None) -> Figure:
-    """Over time, against their limits (dotted red): the friction ratio and mu (the cone), the
-    centre of pressure, ZMP and COM margins (>= 0 where enforced, shaded)."""
+    """Over time, against their limits (dotted red): the friction ratio of each foot and of each
+    contact point (``point_ratio``, ``point_names``) and mu (the cone), the centre of pressure, ZMP
+    and COM margins (>= 0 where enforced, shaded)."""
     fig, panels = panel_axes(axes, "contact_margins", 4, ncols=1)
     t = np.asarray(t, dtype=float)
     ax = panels[0]
     ax.plot(t, series["friction_ratio"], "k-", lw=1.5, label="$|f_{xy}| / f_z$, each foot")
-    for k, name in enumerate(("heel", "ball", "toe")):
-        ax.plot(t, series["point_ratio"][:, k], lw=0.8, label=name)
+    R = np.asarray(series["point_ratio"], dtype=float).reshape(len(t), -1)
+    for k, name in enumerate(_point_names(series.get("point_names"), R.shape[1])):
+        ax.plot(t, R[:, k], lw=0.8, color=POINT_COLOURS[k % len(POINT_COLOURS)], label=name)
     ax.axhline(friction, label=f"friction cone $\\mu$ = {friction:g}", **LIMIT_STYLE)
     ax.set_ylabel("friction ratio")
-    ratios = np.concatenate([np.ravel(series["friction_ratio"]), np.ravel(series["point_ratio"])])
+    ratios = np.concatenate([np.ravel(series["friction_ratio"]), np.ravel(R)])
     top = float(np.nanmax(ratios)) if np.isfinite(ratios).any() else friction
     ax.set_ylim(0.0, min(max(2.0 * friction, 1.1 * top), 4.0 * friction))  # a spike where f_z -> 0 stays readable
     rows = (("cop_margin", "contact", "centre of pressure\nin the foot [m]"),

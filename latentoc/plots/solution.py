@@ -89,9 +89,10 @@ def solution_figures(result: Result, max_joints: int = 12, plane: str | None = N
                                                title=f"{result.problem}: delta = {delta:.3g}")
     if result.convergence:
         figs["convergence"] = plot_convergence(result.convergence, title=f"{result.problem}: Ipopt's convergence")
-    if "wrench" in traj:  # a contact motion: one toe-tip wrench per (symmetric) foot
+    if "wrench" in traj:  # a contact motion: one toe-point wrench per (symmetric) foot, its points' forces
         s = contact_series(model, traj)
-        figs["contact_forces"] = plot_contact_forces(t, traj["wrench"], s["contact"], traj.get("point_forces"))
+        figs["contact_forces"] = plot_contact_forces(t, traj["wrench"], s["contact"], traj.get("point_forces"),
+                                                     point_names=s["point_names"])
         figs["contact_margins"] = plot_contact_margins(t, s, float(traj["friction"]))
         land = s["zmp_enforced"]
         figs["zmp_com"] = plot_zmp_com(s["zmp"][land], s["com"][land], s["polygon"][-1], t=t[land])

@@ -1,6 +1,11 @@
 """A result as a 3-D scene: the robot's parts posed along the optimised and the initial motion, and
 for a contact motion the contact points, forces, friction cones, support polygon, COM and ZMP.
 
+The contact points are both feet's, as many per foot as the trajectory names (``contact_points``,
+placed by :mod:`latentoc.plots.feet`); each has its force arrow and friction cone, shown while its
+foot is on the ground and the point is loaded (``loaded``). A result with no ``point_forces`` has
+each foot's wrench at its toe point.
+
 :func:`build_scene` reads the result schema only (``trajectory.npz``, the problem's ``robot``
 setting for the meshes) and samples the 1 kHz motion at ``rate_hz``; the arrays go into the page
 as base64 little-endian float32 (:func:`b64`), decoded by ``js/page.js``.
@@ -9,12 +14,14 @@ from __future__ import annotations
 
 import base64
 import hashlib
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..plots.contact import contact_series
+from ..plots.feet import MIRROR, contact_points_of, world_forces
 from ..plots.kinematics import floating_base, model_of
 from ..results import Result
 from .geometry import Part, part_poses, robot_parts
@@ -52,47 +59,44 @@ def _part_json(p: Part, meshes: dict[str, int], mesh_data: list[dict[str, Any]])
     return out
 
 
-def contact_points(model: pin.Model, traj: dict[str, Any], Q: np.ndarray) -> np.ndarray:
-    """World positions (n, 6, 3) of the left then right heel, ball and toe tip (``contact_frames``:
-    foot, ball and toe frames of each foot; the heel at ``heel_offset`` in the foot frame)."""
-    frames = [str(f) for f in np.asarray(traj["contact_frames"])]
-    heel = np.asarray(traj["heel_offset"], dtype=float)
-    data = model.createData()
-    out = np.zeros((len(Q), 6, 3))
-    ids = [model.getFrameId(f) for f in frames]
-    for i, q in enumerate(Q):
-        pin.framesForwardKinematics(model, data, q)
-        for foot in range(2):
-            foot_frame, ball, toe = (data.oMf[ids[3 * foot + k]] for k in range(3))
-            out[i, 3 * foot:3 * foot + 3] = [foot_frame.act(heel), ball.translation, toe.translation]
-    return out
+def contact_points(model: pin.Model, traj: Mapping[str, Any], Q: np.ndarray) -> np.ndarray:
+    """World positions (n, 2 k, 3) of the left then the right foot's k contact points the trajectory
+    names (:func:`latentoc.plots.feet.contact_points_of`) at the configurations Q."""
+    return contact_points_of(model, traj).positions(model, Q)
 
 
-def _contacts(model: pin.Model, traj: dict[str, Any], idx: np.ndarray) -> dict[str, Any]:
+def _at(traj: Mapping[str, Any], idx: np.ndarray) -> dict[str, Any]:
+    """The trajectory's per-sample arrays at the indices ``idx``, the other entries as they are."""
+    n = len(traj["t"])
+    static = {"contact_points", "contact_frames", "tau_min", "tau_max"}  # never per sample, whatever n is
+    return {k: (np.asarray(v)[idx] if np.ndim(v) and len(np.asarray(v)) == n and k not in static
+                and not k.endswith("_offset") else v) for k, v in traj.items() if k != "model"}
+
+
+def _contacts(model: pin.Model, traj: Mapping[str, Any], idx: np.ndarray) -> dict[str, Any]:
     """The contact layer at the sampled indices (module doc)."""
-    sub = {k: (np.asarray(v)[idx] if np.ndim(v) and len(np.asarray(v)) == len(traj["t"]) else v)
-           for k, v in traj.items() if k != "model"}
+    sub = _at(traj, idx)
     n = len(idx)
     s = contact_series(model, sub)
-    points = contact_points(model, traj, np.asarray(sub["q"]))
+    feet = contact_points_of(model, traj)
+    k = feet.k
     contact = np.asarray(sub["contact"]).astype(bool)
-    forces = np.zeros((n, 6, 3))
-    if "point_forces" in sub:  # (fx, fz) of the left heel, ball, toe; the right foot mirrors the left
-        F = np.asarray(sub["point_forces"], dtype=float)
-        for foot in range(2):
-            forces[:, 3 * foot:3 * foot + 3, 0] = F[:, :, 0]
-            forces[:, 3 * foot:3 * foot + 3, 2] = F[:, :, 1]
-        loaded = np.asarray(sub["loaded"]).astype(bool) if "loaded" in sub else np.ones((n, 3), bool)
-        active = contact[:, None] & np.tile(loaded, (1, 2))
-    else:  # one wrench per foot at its toe tip
+    if "point_forces" in sub:  # each point's force; the right foot mirrors the left
+        forces = world_forces(sub["point_forces"])
+        loaded = np.asarray(sub["loaded"]).astype(bool) if "loaded" in sub else np.ones((n, k), bool)
+        active = contact[:, None] & np.tile(loaded.reshape(n, k), (1, 2))
+    else:  # one wrench per foot at its toe point
         W = np.asarray(sub["wrench"], dtype=float)
-        forces[:, 2], forces[:, 5] = W[:, :3], W[:, :3] * [1.0, -1.0, 1.0]
-        active = np.zeros((n, 6), bool)
-        active[:, [2, 5]] = contact[:, None]
+        j = feet.index("toe")
+        j = k - 1 if j is None else j
+        forces, active = np.zeros((n, 2 * k, 3)), np.zeros((n, 2 * k), bool)
+        forces[:, j], forces[:, k + j] = W[:, :3], W[:, :3] * MIRROR
+        active[:, [j, k + j]] = contact[:, None]
     weight = sum(i.mass for i in model.inertias) * float(-model.gravity.linear[2])
     zmp = np.where(np.isfinite(s["zmp"]), s["zmp"], 0.0)
-    return {"points": b64(points), "forces": b64(forces * FORCE_SCALE / weight), "active": b64(active, "u1"),
-            "polygon": b64(s["polygon"]), "contact": b64(contact, "u1"), "com": b64(s["com"]), "zmp": b64(zmp),
+    return {"names": feet.labels(), "points": b64(s["points"]), "forces": b64(forces * FORCE_SCALE / weight),
+            "active": b64(active, "u1"), "polygon": b64(s["polygon"]), "corners": int(s["polygon"].shape[1]),
+            "contact": b64(contact, "u1"), "com": b64(s["com"]), "zmp": b64(zmp),
             "mu": float(np.asarray(traj["friction"])) if "friction" in traj else 0.0, "cone_height": CONE_HEIGHT,
             "force_scale": FORCE_SCALE}
 

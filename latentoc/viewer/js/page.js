@@ -1,7 +1,7 @@
 // latentoc's 3-D view of one result (latentoc/viewer): the scene JSON in #latentoc-scene, three.js as THREE.
 // The robot's parts are posed from precomputed world poses (position, quaternion x y z w) per frame;
-// the initial motion is a translucent ghost; a contact motion adds forces, friction cones, the support
-// polygon, the COM's ground projection and the ZMP. #t=SECONDS in the address shows that time, paused.
+// the initial motion is a translucent ghost; a contact motion adds each contact point's force and friction
+// cone (as many points as the scene names), the support polygon, the COM's ground projection and the ZMP. #t=SECONDS in the address shows that time, paused.
 (function () {
   "use strict";
   const S = JSON.parse(document.getElementById("latentoc-scene").textContent);
@@ -124,15 +124,16 @@
   let contacts = null;
   if (S.contacts) {
     const C = S.contacts;
-    contacts = { points: f32(C.points), forces: f32(C.forces), active: bytes(C.active), polygon: f32(C.polygon),
-      contact: bytes(C.contact), com: f32(C.com), zmp: f32(C.zmp), arrows: [], cones: [],
-      arrowGroup: new THREE.Group(), coneGroup: new THREE.Group() };
+    // as many points as the scene names (both feet's), each with its arrow and cone; the polygon's corners
+    contacts = { count: C.names.length, corners: C.corners, points: f32(C.points), forces: f32(C.forces),
+      active: bytes(C.active), polygon: f32(C.polygon), contact: bytes(C.contact), com: f32(C.com), zmp: f32(C.zmp),
+      arrows: [], cones: [], lengths: new Float64Array(C.names.length), arrowGroup: new THREE.Group(), coneGroup: new THREE.Group() };
     const coneGeometry = new THREE.ConeGeometry(C.mu * C.cone_height, C.cone_height, 32, 1, true);
     coneGeometry.rotateX(-Math.PI / 2); // apex down at the contact point, opening up along z
     coneGeometry.translate(0, 0, C.cone_height / 2);
     const coneMaterial = new THREE.MeshStandardMaterial({ color: 0x2e9e5b, transparent: true, opacity: 0.3,
       side: THREE.DoubleSide, depthWrite: false });
-    for (let k = 0; k < 6; k++) {
+    for (let k = 0; k < contacts.count; k++) {
       const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 0.1, 0xd62728, 0.04, 0.025);
       contacts.arrows.push(arrow);
       contacts.arrowGroup.add(arrow);
@@ -142,8 +143,10 @@
       contacts.coneGroup.add(cone);
     }
     const polyGeometry = new THREE.BufferGeometry();
-    polyGeometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(12), 3));
-    polyGeometry.setIndex([0, 1, 2, 0, 2, 3]);
+    polyGeometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * C.corners), 3));
+    const fan = [];
+    for (let k = 1; k + 1 < C.corners; k++) fan.push(0, k, k + 1); // a convex polygon: a triangle fan
+    polyGeometry.setIndex(fan);
     contacts.polygon3 = new THREE.Mesh(polyGeometry, new THREE.MeshBasicMaterial({ color: 0xe3a21a, transparent: true,
       opacity: 0.45, side: THREE.DoubleSide, depthWrite: false }));
     contacts.outline = new THREE.LineLoop(polyGeometry, new THREE.LineBasicMaterial({ color: 0xa06d00 }));
@@ -159,7 +162,7 @@
   // ---------------------------------------------------------------- one frame of the motion
   function frameAt(t) { // the last sample at or before t
     let lo = 0, hi = times.length - 1;
-    while (lo < hi) { const mid = (lo + hi + 1) >> 1; if (times[mid] <= t + 1e-9) lo = mid; else hi = mid - 1; }
+    while (lo < hi) { const mid = (lo + hi + 1) >> 1; if (times[mid] <= t + 1e-6) lo = mid; else hi = mid - 1; } // float32 times
     return lo;
   }
   function pose(i) {
@@ -173,13 +176,14 @@
       }
     }
     if (contacts) {
-      const c = contacts;
-      for (let k = 0; k < 6; k++) {
-        const o = (i * 6 + k) * 3;
+      const c = contacts, m = c.count;
+      for (let k = 0; k < m; k++) {
+        const o = (i * m + k) * 3;
         const at = new THREE.Vector3(c.points[o], c.points[o + 1], c.points[o + 2]);
         const f = new THREE.Vector3(c.forces[o], c.forces[o + 1], c.forces[o + 2]);
-        const on = c.active[i * 6 + k] === 1;
+        const on = c.active[i * m + k] === 1;
         c.arrows[k].visible = on && f.length() > 1e-4;
+        c.lengths[k] = c.arrows[k].visible ? f.length() : 0;
         if (c.arrows[k].visible) {
           c.arrows[k].position.copy(at);
           c.arrows[k].setDirection(f.clone().normalize());
@@ -191,7 +195,9 @@
       const inContact = c.contact[i] === 1;
       c.polygonGroup.visible = inContact && controls.polygon.checked;
       const pos = c.polygon3.geometry.attributes.position;
-      for (let k = 0; k < 4; k++) pos.setXYZ(k, c.polygon[(i * 4 + k) * 2], c.polygon[(i * 4 + k) * 2 + 1], 0.002);
+      for (let k = 0; k < c.corners; k++) {
+        pos.setXYZ(k, c.polygon[(i * c.corners + k) * 2], c.polygon[(i * c.corners + k) * 2 + 1], 0.002);
+      }
       pos.needsUpdate = true;
       c.polygon3.geometry.computeBoundingSphere();
       c.comDot.position.set(c.com[i * 3], c.com[i * 3 + 1], 0.003);
@@ -242,6 +248,15 @@
   resize();
   placeCamera();
 
+  // what the contact layer shows now, for a test in a browser: per point its name, whether its arrow and cone
+  // are drawn, where (m) and the arrow's length (m)
+  function contactsShown() {
+    const r = (x) => Math.round(x * 1e4) / 1e4;
+    return contacts.arrows.map((a, k) => ({ name: S.contacts.names[k], arrow: a.visible && contacts.arrowGroup.visible,
+      cone: contacts.cones[k].visible && contacts.coneGroup.visible, at: contacts.cones[k].position.toArray().map(r),
+      length: r(contacts.lengths[k]) }));
+  }
+
   function loop(now) {
     if (clock.playing) {
       const step = (now - clock.wall) / 1000 * parseFloat(controls.speed.value);
@@ -261,6 +276,7 @@
     document.body.dataset.time = times[i].toFixed(3);
     document.body.dataset.played = clock.played.toFixed(3);
     document.body.dataset.ticks = String(++clock.ticks);
+    if (contacts) document.body.dataset.contacts = JSON.stringify(contactsShown());
     requestAnimationFrame(loop);
   }
   requestAnimationFrame((now) => { clock.wall = now; loop(now); });
