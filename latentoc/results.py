@@ -72,7 +72,6 @@ TRAJECTORY_KEYS: dict[str, str] = {
     "contact_points": "names of the contact points (heel, ball, toe, pad)",
     "heel_offset": "heel point in the foot frame, m (3)",
     "pad_offset": "the toes' pad point in the toe tip's frame, m (3)",
-    "toe_offset": "the toe point (the toe tip on the ground) in the toe tip's frame, m (3)",
     "takeoff": "takeoff time, s",
     "touchdown": "touchdown time, s",
     "settle": "end of the landing's settling, s",

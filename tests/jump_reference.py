@@ -12,7 +12,7 @@ import pinocchio as pin
 from latentoc.jump.base import base_to_freeflyer
 
 SAGITTAL = [0, 2, 4]
-POINT_FRAMES = ("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")  # heel (on the foot), ball, toe point, pad (on the toes)
+POINT_FRAMES = ("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")  # heel (on the foot), ball, toe tip, pad (on the toes)
 MIRROR = np.array([1.0, -1.0, 1.0])
 
 
@@ -32,36 +32,13 @@ def full_state(smap, b, bd, bdd, y, yd, ydd):
 
 
 def foot_points(model, data, q, geom):
-    """World heel, ball, toe point and pad of the left foot (3 x 4 columns) by forward kinematics (the
-    toe point and the pad fixed in the toe tip's frame at their offsets)."""
+    """World heel, ball, toe tip and pad of the left foot (3 x 4 columns) by forward kinematics."""
     pin.framesForwardKinematics(model, data, q)
     M = data.oMf[model.getFrameId("lfoot")]
     T = data.oMf[model.getFrameId("ltoes_end")]
     return np.column_stack([M.act(np.asarray(geom.heel_offset, float)),
                             data.oMf[model.getFrameId("lfoot_end")].translation,
-                            T.act(np.asarray(geom.toe_offset, float)), T.act(np.asarray(geom.pad_offset, float))])
-
-
-def point_velocities(model, data, q, v, geom):
-    """World velocities (3 x 4 columns) of the heel, ball, toe point and pad: Pinocchio's frame
-    velocities (LOCAL_WORLD_ALIGNED) moved to the points."""
-    P = foot_points(model, data, q, geom)
-    pin.forwardKinematics(model, data, q, v)
-    out = []
-    for k, frame in enumerate(POINT_FRAMES):
-        fid = model.getFrameId(frame)
-        nu = pin.getFrameVelocity(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
-        out.append(nu.linear + np.cross(nu.angular, P[:, k] - data.oMf[fid].translation))
-    return np.column_stack(out)
-
-
-def levelling_pitch(model, data, smap, y, front, back, geom):
-    """The base pitch that puts the points ``front`` and ``back`` (indices of heel, ball, toe, pad) at
-    one height, from their positions by forward kinematics with the base at the origin, unpitched:
-    the pitch p with -sin(p) dx + cos(p) dz = 0 for their difference (dx, dz) in the base frame."""
-    q = full_state(smap, np.zeros(3), np.zeros(3), np.zeros(3), y, np.zeros_like(y), np.zeros_like(y))[0]
-    P = foot_points(model, data, q, geom)
-    return float(np.arctan2(P[2, front] - P[2, back], P[0, front] - P[0, back]))
+                            T.translation, T.act(np.asarray(geom.pad_offset, float))])
 
 
 def point_forces(lam, mu):

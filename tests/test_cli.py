@@ -154,11 +154,7 @@ def test_solve_summary_reports_the_contact_checks():
     from latentoc.jump.verify import verify
 
     model, arrays = _static_arrays()
-    n = len(arrays["t"])
-    arrays["loaded"] = np.ones((n, 4), dtype=int)
-    forces = np.zeros((n, 4, 2))
-    forces[:, 0], forces[:, 2] = (-60.0, 300.0), (20.0, 100.0)  # standing still: no travel, no work
-    arrays["point_forces"] = forces
+    arrays["loaded"] = np.ones((len(arrays["t"]), 4), dtype=int)
     checks = verify(model, arrays)
     r = make_result(tube=0.02, success=False, friction=0.4, **checks)
     text = summary(r)
@@ -168,16 +164,4 @@ def test_solve_summary_reports_the_contact_checks():
     assert f"centre-of-pressure margin {1e3 * checks['cop_margin_loaded']:.2f} mm" in text
     assert f"COM margin {1e3 * checks['com_margin']:.2f} mm" in text
     assert f"Eq. 33 feet distance (both toe tips) {checks['eq33_feet_distance']:.3f} m" in text
-    def mm(x):  # to 0.01 mm, a length that rounds to zero as 0.00
-        return f"{round(1e3 * x, 2) + 0.0:.2f}"
-
-    assert (f"contact: loaded points travel {mm(checks['max_loaded_travel'])} mm, height up to "
-            f"{mm(checks['max_loaded_height'])} mm, unloaded points down to {mm(checks['min_unloaded_height'])} mm; "
-            f"the ground's work {checks['ground_work_positive']:.3g} J positive, {checks['ground_work']:.3g} J net") in text
-    assert "contact: loaded points travel 0.00 mm, height up to 0.00 mm, unloaded points down to 0.00 mm" in text
-    assert f"toe point: forward travel {checks['toe_displacement']:.3f} m" in text
-    assert "toe tip:" not in text and "slip" not in text
-    # a result without point forces (an older one) has no contact line
-    del arrays["point_forces"]
-    older = summary(make_result(tube=0.02, success=False, friction=0.4, **verify(model, arrays)))
-    assert "contact:" not in older and "toe point: forward travel" in older
+    assert f"toe tip: forward travel {checks['toe_displacement']:.3f} m; in contact slip {100 * checks['toe_slip']:.2f} cm" in text

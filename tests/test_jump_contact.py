@@ -17,7 +17,7 @@ def test_pyramid_forces_are_unilateral_and_in_the_cone():
 
 
 def test_point_forces_act_on_their_own_bodies():
-    """Symbolic sum J^T f (heel, ball on the foot, toe point and pad on the toes, right foot mirrored) equals
+    """Symbolic sum J^T f (heel, ball on the foot, toe and pad on the toes, right foot mirrored) equals
     numeric Pinocchio: rnea with the same forces as external forces on the joints' bodies."""
     from latentoc.jump.contact import generator_columns, point_generalized_force, point_jacobians
 
@@ -36,7 +36,7 @@ def test_point_forces_act_on_their_own_bodies():
     M = d.oMf[model.getFrameId(FOOT)]
     T = d.oMf[model.getFrameId(TOE)]
     left = [M.translation + M.rotation @ geom.heel_offset, d.oMf[model.getFrameId("lfoot_end")].translation,
-            T.translation + T.rotation @ geom.toe_offset, T.translation + T.rotation @ geom.pad_offset]
+            T.translation, T.translation + T.rotation @ geom.pad_offset]
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     for side in "lr":
         for k, frame in enumerate(("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")):
@@ -64,11 +64,7 @@ def test_numeric_foot_points_match_the_symbolic_ones():
         assert np.allclose(foot_points(model, d, geom), np.array(sym_points(tr.Q[i])), atol=1e-12)
 
 
-def test_every_point_lies_on_the_ground_when_standing():
-    """In the standing pose (the first training frame) the heel, ball, toe point and pad are all on the
-    ground, z = 0 (the lower of the ball and the toe tip): the heel below the ankle, the toe point
-    below the toe tip, the pad TOE_PAD behind it; ball_back is the ball's distance behind the toe point,
-    ground_y the points' sideways positions (their ground points' y)."""
+def test_the_pad_lies_behind_the_toe_tip_on_the_ground_when_standing():
     from latentoc.jump.contact import TOE_PAD, foot_points
 
     model, _ = jump_model()
@@ -77,12 +73,5 @@ def test_every_point_lies_on_the_ground_when_standing():
     d = model.createData()
     pin.framesForwardKinematics(model, d, q)
     heel, ball, toe, pad = foot_points(model, d, geom).T
-    tip, ankle = d.oMf[model.getFrameId(TOE)].translation, d.oMf[model.getFrameId(FOOT)].translation
-    assert abs(min(ball[2], tip[2])) < 1e-12  # the training data's floor
-    np.testing.assert_allclose([heel[2], ball[2], toe[2], pad[2]], 0.0, atol=1e-12)
-    np.testing.assert_allclose(toe[:2], tip[:2], atol=1e-12)
-    np.testing.assert_allclose(heel[:2], ankle[:2], atol=1e-12)
-    np.testing.assert_allclose(pad - toe, [-TOE_PAD, 0.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(geom.ground_y, [heel[1], ball[1], toe[1], pad[1]], atol=1e-12)
-    assert np.isclose(geom.ball_back, toe[0] - ball[0], rtol=0, atol=1e-12) and geom.ball_back > 0.05
+    np.testing.assert_allclose(pad - toe, [-TOE_PAD, 0.0, min(ball[2], toe[2]) - toe[2]], atol=1e-12)
     assert heel[0] < ball[0] < pad[0] < toe[0]

@@ -28,26 +28,24 @@ def full_jump(jump_parts):
     js, robot = p.js, p.robot
     path = joint_range_path(js.init["P_joint"], 30.0, antisymmetric_centre(js.smap))
     blocks = js.blocks(robot, path.layer)
-    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05, roll_spacing=0.01)
+    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05)
     ph, nk = js.phases, robot.unmirrored.size
     tc = contact_sample_grid(settings, ph)[::2]
     tf = np.round(np.arange(ph.takeoff + 0.02, ph.touchdown - 0.01, 0.1), 3)
     selection = Selection(np.ones((12, nk)), np.ones((12, 8)), tc, np.ones((len(tc), nk)), np.ones((len(tc), 8)),
                           tf, np.ones((len(tf), nk)), np.zeros(0))
-    nlp = build_nlp(robot, path.layer, blocks, ph, settings, path.P, js.init["hinge_standing"], "distance", selection,
-                    path.P_range)
-    x0 = initial_point(robot, path.layer, nlp, path.P, js.init["x_L"], js.init["y_L"], ph.takeoff, js.init["t"],
-                       js.init["base"])
+    nlp = build_nlp(robot, path.layer, blocks, ph, settings, path.P, "distance", selection, path.P_range)
+    x0 = initial_point(robot, path.layer, nlp, path.P, js.init["t"], js.init["base"], js.init["x_L"], ph.takeoff,
+                       ph.touchdown)
     return SimpleNamespace(p=p, path=path, blocks=blocks, settings=settings, nlp=nlp, x0=x0)
 
 
 def _directions(nlp, n_random, seed):
-    """Random directions and the first coordinate of the path's, the landing point's, the rolling pitch's
-    and the forces' blocks."""
+    """Random directions and the first coordinate of the path's, the bases' and the forces' blocks."""
     rng = np.random.default_rng(seed)
     var = nlp.variables
     return [rng.standard_normal(var.n) for _ in range(n_random)] + \
-        [np.eye(var.n)[var.slices[name].start] for name in ("P", "x_L", "roll", "lam", "L_to")]
+        [np.eye(var.n)[var.slices[name].start] for name in ("P", "base_stance", "base_land", "lam", "L_to")]
 
 
 @pytest.mark.slow  # ~1 min with LATENTOC_JIT=0: the 37-joint blocks' SX derivatives are built here
@@ -128,8 +126,8 @@ def test_full_space_start_is_the_training_joints_fit(full_jump):
     np.testing.assert_allclose(hi - P[1:-1], half, atol=1e-12)
     np.testing.assert_allclose(P[1:-1] - lo, half, atol=1e-12)
     assert np.all(x0 >= jn.lbx) and np.all(x0 <= jn.ubx)
-    latent = build_nlp(p.robot, p.layer, p.blocks, js.phases, full_jump.settings, js.init["P"], js.init["hinge_standing"],
-                       "distance", jn.selection)
+    latent = build_nlp(p.robot, p.layer, p.blocks, js.phases, full_jump.settings, js.init["P"], "distance",
+                       jn.selection)
     for name in jn.variables.shapes:
         if name != "P":
             for a, b in ((jn.lbx, latent.lbx), (jn.ubx, latent.ubx)):
@@ -146,8 +144,8 @@ def test_joint_path_refuses_tube_points(full_jump):
     f = full_jump
     with_tube = f.nlp.selection.merged(Selection.empty(12, f.p.robot.unmirrored.size, np.array([0.5])))
     with pytest.raises(ValueError, match="tube points"):
-        build_nlp(f.p.robot, f.path.layer, f.blocks, f.p.js.phases, f.settings, f.path.P, f.p.js.init["hinge_standing"],
-                  "distance", with_tube, f.path.P_range)
+        build_nlp(f.p.robot, f.path.layer, f.blocks, f.p.js.phases, f.settings, f.path.P, "distance", with_tube,
+                  f.path.P_range)
 
 
 @pytest.mark.parametrize("kw, match", [

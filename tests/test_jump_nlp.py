@@ -98,8 +98,8 @@ def test_point_and_multipliers_follow_their_rows_into_an_nlp_with_more_samples(s
     nk = sj.robot.unmirrored.size
     extra = Selection(np.zeros((12, nk)), np.zeros((12, 8)), np.array([0.1234, 0.9123]), np.ones((2, nk)),
                       np.zeros((2, 8)), np.array([0.5]), np.ones((1, nk)), np.zeros(0))
-    new = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], sj.js.init["hinge_standing"],
-                    "distance", old.selection.merged(extra))
+    new = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "distance",
+                    old.selection.merged(extra))
     assert new.nlp.m > old.nlp.m and new.variables.n == old.variables.n + 2 * 8 + 4
     x, _ = carried_point(old, new, sj.x0)
     for name in old.variables.shapes:
@@ -128,13 +128,10 @@ def test_point_and_multipliers_follow_their_rows_into_an_nlp_with_more_samples(s
 
 def test_row_and_variable_bounds(small_jump):
     """Torque rows bounded by the training limits (held TORQUE_BACKOFF inside them) over their range
-    (per joint, at every node and sample), the loaded points' sideways offsets within the lateral
-    tolerance, the unloaded points' heights one-sided by the ground
-    tolerance (the heel's where the toes bear the load, the toe point's and the pad's on the flat
-    foot, the pad's alone while the toes roll), the centre of pressure by the loaded support (the
-    front by the toe point or, on the flat foot, the ball; none while rolling), the switches, feet,
-    polygons, flight clearance and tube as the module doc says; edge weights >= 0, zero on the
-    unloaded points and on every edge of the nodes inside a rolling window (they have no rows)."""
+    (per joint, at every node and sample), the contact schedule in the heel and ball bounds (a loaded point on the ground within
+    the contact tolerance, an unloaded ball above the soft-sole depth), the centre of pressure by
+    the loaded support, the feet, polygons, flight clearance and tube one-sided as the module doc
+    says; edge weights >= 0 and zero on the unloaded points."""
     from latentoc.jump.contact import POINTS
     from latentoc.jump.nlp import TORQUE_BACKOFF, TUBE_BACKOFF
 
@@ -147,58 +144,37 @@ def test_row_and_variable_bounds(small_jump):
     np.testing.assert_allclose(lbg[sel] * scale[comps[sel]], lo[act][comps[sel]] + TORQUE_BACKOFF, rtol=1e-12)
     np.testing.assert_allclose(ubg[sel] * scale[comps[sel]], hi[act][comps[sel]] - TORQUE_BACKOFF, rtol=1e-12)
     t = jn.row_times
-    tc = np.concatenate([jn.grid["stance"], jn.grid["land"]])
-    rolling = ph.pivot(tc)
-    contact = np.concatenate([tc[~rolling], jn.selection.contact])  # the contact times with rows
-    assert len(np.unique(contact)) == len(contact) and rolling.sum() == 2
-    flat, pivot = ph.flat(contact), ph.pivot(contact)
-    np.testing.assert_array_equal(np.sort(t[names == "heel_height"]), np.sort(contact[~flat]))
-    toes_t, toes_c = t[names == "toes_height"], comps[names == "toes_height"]
-    np.testing.assert_array_equal(np.sort(toes_t[toes_c == 0]), np.sort(contact[flat]))  # the toe point
-    np.testing.assert_array_equal(np.sort(toes_t[toes_c == 1]), np.sort(contact[flat | pivot]))  # the pad
-    assert flat.sum() > 10 and (~flat & ~pivot).sum() > 3 and pivot.sum() == 9  # 0.259, 0.26, .27, .28, .289, .29, .3, .7, .707
-    for part in ("heel_height", "toes_height"):
-        np.testing.assert_array_equal(lbg[names == part], -s.ground_tolerance)
-        np.testing.assert_array_equal(ubg[names == part], np.inf)
-    # the loaded points' sideways offsets at every contact time with rows, within the lateral tolerance
-    lat = names == "lateral"
-    for k, point in enumerate(POINTS):
-        np.testing.assert_array_equal(np.sort(t[lat & (comps == k)]), np.sort(contact[ph.loaded(point, contact)]))
-    assert set(comps[lat]) == {0, 1, 2, 3}
-    np.testing.assert_array_equal(lbg[lat], -s.lateral_tolerance)
-    np.testing.assert_array_equal(ubg[lat], s.lateral_tolerance)
-    # one front and one back centre-of-pressure row at every contact time with rows, but the rolling
-    front = names[np.isin(names, ["cop_front", "cop_front_ball"])]
-    tf = t[np.isin(names, ["cop_front", "cop_front_ball"])]
-    np.testing.assert_array_equal(front, np.where(ph.flat(tf), "cop_front_ball", "cop_front"))
+    for part in ("heel_height", "ball_height"):
+        assert (names == part).sum() == 12  # at the contact nodes only
+    heel, ball = ph.loaded("heel", t[names == "heel_height"]), ph.loaded("ball", t[names == "ball_height"])
+    ct = s.contact_tolerance
+    np.testing.assert_array_equal(lbg[names == "heel_height"], -ct)
+    np.testing.assert_array_equal(ubg[names == "heel_height"], np.where(heel, ct, np.inf))
+    np.testing.assert_array_equal(lbg[names == "ball_height"], np.where(ball, -ct, -s.ball_tolerance))
+    np.testing.assert_array_equal(ubg[names == "ball_height"], np.where(ball, ct, np.inf))
+    assert not heel.all() and not ball.all() and heel.any() and ball.any()
+    # one centre-of-pressure row for the rearmost loaded point at every node and contact sample
     back = names[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
     tb = t[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
     want = np.where(ph.loaded("heel", tb), "cop_heel", np.where(ph.loaded("ball", tb), "cop_ball", "cop_pad"))
     np.testing.assert_array_equal(back, want)
-    np.testing.assert_array_equal(np.sort(tb), np.sort(contact[~pivot]))
-    np.testing.assert_array_equal(np.sort(tf), np.sort(contact[~pivot]))
-    assert set(back) == {"cop_heel", "cop_ball"}  # the toes lie flat only while the ball is loaded (no cop_pad)
-    # the switches: the toe joint where the heel leaves and strikes, the rolling pitch where it starts and stops
-    np.testing.assert_allclose(t[names == "anchor_switch"], np.repeat(ph.switches(), 2), atol=1e-12)
-    np.testing.assert_allclose(t[names == "roll_switch"], np.repeat(ph.roll_switches(), 2), atol=1e-12)
-    one_sided = {"dynamics": (0, 0), "takeoff": (0, 0), "anchor_switch": (0, 0), "roll_switch": (0, 0),
+    assert len(back) == (names == "cop_front").sum() == 12 + len(jn.selection.contact)
+    one_sided = {"toe_position": (-s.foot_tolerance, s.foot_tolerance), "dynamics": (0, 0), "takeoff": (0, 0),
                  "impact": (0, 0), "touchdown_position": (0, 0), "pitch_integration": (0, 0),
                  "flight_base": (0, 0), "pitch_rate": (0, 0),
                  "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "flight_clearance": (0, np.inf),
-                 "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "cop_front": (0, np.inf), "cop_front_ball": (0, np.inf),
-                 "cop_heel": (0, np.inf), "cop_ball": (0, np.inf), "cop_pad": (0, np.inf)}
-    assert set(one_sided) - {"cop_pad"} | {"torque", "heel_height", "toes_height", "lateral"} == set(names)
+                 "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf),
+                 "cop_pad": (0, np.inf)}
+    assert set(one_sided) | {"torque", "heel_height", "ball_height"} == set(names)
     for part, (a, b) in one_sided.items():
         assert np.all(lbg[names == part] == a) and np.all(ubg[names == part] == b), part
     var = jn.variables
-    for block, times, empty in (("lam", tc, rolling), ("lam_sample", jn.selection.contact, np.zeros(len(jn.selection.contact), bool))):
+    for block, times in (("lam", np.concatenate([jn.grid["stance"], jn.grid["land"]])), ("lam_sample", jn.selection.contact)):
         ub = jn.ubx[var.index(block)]
         assert np.all(jn.lbx[var.index(block)] == 0)
         for k, point in enumerate(POINTS):
             np.testing.assert_array_equal(ub[:, 2 * k:2 * k + 2] == 0,
-                                          np.repeat((~ph.loaded(point, times) | empty)[:, None], 2, axis=1))
-        assert np.all(ub[ub > 0] == np.inf)
-    np.testing.assert_array_equal(jn.ubx[var.index("lam_impact")] > 0, np.repeat([False, False, True, False], 2))
+                                          np.repeat(~ph.loaded(point, times)[:, None], 2, axis=1))
     assert np.all(jn.lbx[var.index("lam_impact")] == 0)
     bounded = np.concatenate([var.index(b).ravel() for b in ("lam", "lam_sample", "lam_impact")])
     others = np.setdiff1d(np.arange(var.n), bounded)
@@ -216,8 +192,8 @@ def test_objectives(small_jump):
     reg = FORCE_REGULARISATION * (np.sum(parts["lam"] ** 2) + np.sum(parts["lam_impact"] ** 2)
                                   + np.sum(parts["lam_sample"] ** 2))
     assert sj.nlp.nlp.objective(sj.x0) == pytest.approx(-parts["x_L"][0] + reg, rel=1e-12)
-    feas = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"],
-                     sj.js.init["hinge_standing"], "feasibility", sj.nlp.selection)
+    feas = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "feasibility",
+                     sj.nlp.selection)
     assert feas.nlp.objective(sj.x0) == pytest.approx(reg, rel=1e-12)
     x = np.array(sj.x0)
     P = feas.variables.index("P")
@@ -225,5 +201,4 @@ def test_objectives(small_jump):
     P_all = sj.js.init["P"]
     assert feas.nlp.objective(x) == pytest.approx(reg + 0.01 / np.mean(P_all ** 2), rel=1e-9)
     with pytest.raises(ValueError, match="objective must be one of .*'feasibility', 'distance'.*got 'speed'"):
-        build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], sj.js.init["hinge_standing"],
-                  "speed")
+        build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "speed")

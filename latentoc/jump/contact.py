@@ -3,18 +3,16 @@
 Contact points of the left foot (the right one is its mirror image):
 
 * ``ball`` - the end of the foot bone (frame ``lfoot_end``);
-* ``toe`` - the end of the toes bone (frame ``ltoes_end``) dropped to the ground when standing;
+* ``toe`` - the end of the toes bone (frame ``ltoes_end``);
 * ``heel`` - a point fixed in the foot body (frame ``lfoot``, at the ankle): the ankle
   dropped vertically to the ground in the first (standing) training frame;
 * ``pad`` - a point fixed in the toes body ``TOE_PAD`` behind the toe tip on the ground when
   standing: the toes' contact patch, so that a foot on its toes alone can hold a moment (with
   the toe tip alone every base row of such a sample would ask the motion for none).
 
-Every point lies on the ground (z = 0) in the standing pose. In contact the base is anchored
-(:meth:`.robot.JumpRobot.anchored`): while the heel is loaded the foot lies flat (heel and ball
-on their ground points, the toes unloaded and above the ground); otherwise the toes lie flat, the
-toe point on its ground point ``(x_pin, 0)`` and the ball (the toes' joint, at their rear end)
-with them. Either way the loaded points stick by construction.
+In contact (stance and landing) the toe tip stays near its ground point ``(x_pin, z = 0)``
+(the contact rows, :mod:`.rows.contact`): the captured push-off rolls over it (the ball
+rises ~8 cm before takeoff while the toe tip stays down) and the landing is toe-first.
 
 Contact forces: three points per foot (heel, ball, toe), each with a 2-D friction
 pyramid written with its two edge generators ``lam1 (mu, 1) + lam2 (-mu, 1)``,
@@ -26,7 +24,7 @@ push only when they are on the ground, by the training motion's contact schedule
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -55,13 +53,10 @@ def joint_embedding(smap: SymmetryMap) -> np.ndarray:
 
 @dataclass
 class FootGeometry:
-    """Heel point in the ``lfoot`` frame, pad and toe points in the ``ltoes_end`` frame."""
+    """Heel point in the ``lfoot`` frame, pad point in the ``ltoes_end`` frame."""
 
     heel_offset: np.ndarray
     pad_offset: np.ndarray
-    toe_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    ball_back: float = 0.0  # m the ball is behind the toe point when the toes lie flat
-    ground_y: np.ndarray = field(default_factory=lambda: np.zeros(4))  # the points' y when standing (heel, ball, toe, pad)
 
     @classmethod
     def from_standing(cls, model: pin.Model, q_stand: np.ndarray) -> "FootGeometry":
@@ -73,11 +68,7 @@ class FootGeometry:
         heel[2] = ground
         T = d.oMf[model.getFrameId(TOE)]
         pad = T.translation + np.array([-TOE_PAD, 0.0, ground - T.translation[2]])
-        toe = T.translation + np.array([0.0, 0.0, ground - T.translation[2]])
-        ball = d.oMf[model.getFrameId(BALL)].translation
-        return cls(M.rotation.T @ (heel - M.translation), T.rotation.T @ (pad - T.translation),
-                   T.rotation.T @ (toe - T.translation), float(toe[0] - ball[0]),
-                   np.array([heel[1], ball[1], toe[1], pad[1]]))
+        return cls(M.rotation.T @ (heel - M.translation), T.rotation.T @ (pad - T.translation))
 
 
 def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
@@ -88,8 +79,7 @@ def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
     ball = sym.frame_placement(BALL)(q)[0]
     pt, Rt = sym.frame_placement(TOE)(q)
     pad = pt + Rt @ ca.DM(geom.pad_offset)
-    toe = pt + Rt @ ca.DM(geom.toe_offset)
-    return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, toe, pad)], ["q"], ["P"])
+    return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, pt, pad)], ["q"], ["P"])
 
 
 def generator_matrix(mu: float = MU) -> np.ndarray:
@@ -154,7 +144,7 @@ def foot_points(model: pin.Model, data: pin.Data, geom: FootGeometry) -> np.ndar
     M = data.oMf[model.getFrameId(FOOT)]
     T = data.oMf[model.getFrameId(TOE)]
     return np.column_stack([M.translation + M.rotation @ geom.heel_offset, data.oMf[model.getFrameId(BALL)].translation,
-                            T.translation + T.rotation @ geom.toe_offset, T.translation + T.rotation @ geom.pad_offset])
+                            T.translation, T.translation + T.rotation @ geom.pad_offset])
 
 
 def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootGeometry) -> np.ndarray:

@@ -1,9 +1,9 @@
 """The solved jump on a 1 kHz grid: q, v, a, torques and contact forces, for the numeric checks.
 
 Joint motion from the GP layer along the optimal latent path (or the joint path itself, the
-identity layer: then no latent path and no sigma^2), the base anchored on the flat foot or the
-flat toes in the contact phases (:meth:`.robot.JumpRobot.anchored`) and, in flight, ballistic from
-the takeoff state with the pitch rate integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
+identity layer: then no latent path and no sigma^2), the base from the contact
+phases' splines and, in flight, ballistic from the takeoff state with the pitch rate
+integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
 and samples (the wrench split is part of the solution there); between them, the edge weights
 interpolated and corrected to the non-negative weights nearest them that balance the sagittal base
 rows (:func:`corrected_edge_weights`). The exchange (:mod:`.exchange`) adds a contact sample wherever
@@ -33,44 +33,35 @@ def trajectory(robot: JumpRobot, layer: GPLayer | IdentityLayer, phases: Phases,
     """Arrays of solution ``w`` of ``nlp`` on a 1 kHz grid and at the contact nodes (module doc)."""
     ph = phases
     parts = nlp.variables.unpack(w)
-    sp_ = nlp.splines[0]
+    sp_, sps, spl = nlp.splines
     P = nlp.control_points(w)
     model = robot.sym.model
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
-    X = sp_.evaluate(P, t)
-    Y = nlp.joint_motion(robot, layer, w, t, ph)
+    X, Xd, Xdd = (sp_.evaluate(P, t, k) for k in range(3))
+    m = layer.motion(np.hstack([X, Xd, Xdd]))
     path = {"sigma2": layer.variance(X)[0], "latent": X} if isinstance(layer, GPLayer) else {}
     st, la = t <= ph.takeoff, t >= ph.touchdown
     fl = ~st & ~la
     B = [np.zeros((len(t), 3)) for _ in range(3)]
-    flat, rolling = ph.flat(t), ph.pivot(t)
-    roll = nlp.roll_pitch(w, t)
-    for mask, x_pin in ((st, 0.0), (la, float(parts["x_L"][0]))):
-        for anchor, on in (("foot", mask & flat), ("toes", mask & ~flat & ~rolling), ("rolling", mask & rolling)):
-            if not on.any():
-                continue
-            fn = robot.rolling if anchor == "rolling" else robot.anchored(anchor)
-            extra = [roll[on, k][None, :] for k in range(3)] if anchor == "rolling" else []
-            based = fn.map(int(on.sum()))(*(y[on].T for y in Y), x_pin, *extra)
-            for k in range(3):
-                B[k][on] = np.asarray(based[k]).T
+    for k in range(3):
+        B[k][st] = sps.evaluate(parts["base_stance"], np.clip(t[st], 0, sps.duration), k)
+        B[k][la] = spl.evaluate(parts["base_land"], np.clip(t[la] - ph.touchdown, 0, spl.duration), k)
     t_to = np.array([ph.takeoff])
-    y_to = [y.T for y in nlp.path_motion(layer, w, t_to)]
-    b_to = [np.asarray(v) for v in robot.rolling(*y_to, 0.0, *nlp.roll_pitch(w, t_to)[0])]
+    m_to = layer.motion(np.hstack([sp_.evaluate(P, t_to, k) for k in range(3)]))
+    b_to = [sps.evaluate(parts["base_stance"], t_to, k).ravel() for k in range(2)]
     tau_f = np.concatenate([[0.0], t[fl] - ph.takeoff])
-    Yf = [np.vstack([a, b[fl]]).T for a, b in zip((y.T for y in y_to), Y)]
-    bb = ballistic_base(flight_functions(robot.sym, robot.smap), Yf[0], Yf[1], Yf[2], tau_f, b_to[0], b_to[1], y_to[0], y_to[1])
+    Yf = [np.vstack([a[:1], b[fl]]).T for a, b in ((m_to.y, m.y), (m_to.yd, m.yd), (m_to.ydd, m.ydd))]
+    bb = ballistic_base(flight_functions(robot.sym, robot.smap), Yf[0], Yf[1], Yf[2], tau_f, b_to[0], b_to[1], m_to.y.T, m_to.yd.T)
     for k in range(3):
         B[k][fl] = bb[k].T[1:]
     q7, v6, a6 = base_to_freeflyer(*B)
     E = robot.E
-    Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in zip((q7, v6, a6), Y))
+    Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in ((q7, m.y), (v6, m.yd), (a6, m.ydd)))
 
     # contact forces: the NLP's edge weights at its nodes and samples, balanced between them (module doc)
     grid, W, mu = nlp.grid, robot.weight, robot.mu
+    lam_nodes = parts["lam"]  # contact nodes x 6, body weights
     node_t = np.concatenate([grid["stance"], grid["land"]])
-    held = ~ph.pivot(node_t)  # the rolling toes' nodes carry no rows (their samples do)
-    lam_nodes, node_t = parts["lam"][held], node_t[held]  # body weights
     knot_t = np.concatenate([node_t, nlp.selection.contact])
     knot_lam = np.vstack([lam_nodes, parts["lam_sample"]])
     order = np.argsort(knot_t, kind="stable")
@@ -111,7 +102,7 @@ def trajectory(robot: JumpRobot, layer: GPLayer | IdentityLayer, phases: Phases,
             "node_t": node_t, "node_wrench": node_w, "node_lambda": lam_nodes.T,
             "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
             "contact_points": np.array(POINTS), "heel_offset": robot.geom.heel_offset,
-            "pad_offset": robot.geom.pad_offset, "toe_offset": robot.geom.toe_offset,
+            "pad_offset": robot.geom.pad_offset,
             "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,
             "tau_min": robot.limits.tau_min, "tau_max": robot.limits.tau_max, "friction": mu,
             "model": model.saveToString()}

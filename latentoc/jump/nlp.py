@@ -1,17 +1,15 @@
 """The broad-jump NLP (Sect. 4.2, Eq. 33-36): row families on nodes and samples, bounds, objective.
 
 Joint motion: y = mu_Q(x(t)) along the latent spline (Eq. 18, 26-28, the GP layer), or, for the
-full configuration-space baseline, the joint spline itself (the identity layer, :mod:`.path`);
-in contact the base is anchored (:meth:`.robot.JumpRobot.anchored`): while the heel is loaded
-the foot lies flat, otherwise the toes, with the toe point on its ground point (0 in the stance,
-x_L in the landing), so the loaded points stick by construction; where the anchor changes the toe
-joint is at its standing angle and at rest; in flight the body falls freely. Hard constraints, each a row family (:mod:`.rows`), where
-:class:`~.selection.Selection` puts them:
+full configuration-space baseline, the joint spline itself (the identity layer, :mod:`.path`); the base
+has its own (x, z, pitch) splines in the stance and the landing, and falls freely in flight.
+Hard constraints, each a row family (:mod:`.rows`), where :class:`~.selection.Selection` puts
+them:
 
-* contact nodes (stance and landing, every 10 ms): base rows = sum J^T f, the training contact
-  schedule (an unloaded heel or ball carries no force, an unloaded heel stays above the ground),
-  and the chosen torque limits (Eq. 34) and edges of the support polygon for the ZMP and, once
-  the landing has settled, the COM (Eq. 35-36);
+* contact nodes (stance and landing, every 10 ms): base rows = sum J^T f, the toe tip within
+  ``foot_tolerance`` of its ground point, the training contact schedule (a loaded heel or ball
+  on the ground, an unloaded one carries no force), and the chosen torque limits (Eq. 34) and
+  edges of the support polygon for the ZMP and, once the landing has settled, the COM (Eq. 35-36);
 * contact samples between the nodes: their own edge weights, the base rows and chosen rows;
 * takeoff and touchdown: the flight's state from the stance, the inelastic impact;
 * the flight: the pitch integrates the pitch rate of the conserved momentum, the feet stay above
@@ -69,8 +67,7 @@ class JumpNLP:
     row_times: np.ndarray
     row_components: np.ndarray
     grid: dict[str, np.ndarray]
-    splines: tuple[BSpline]
-    rolls: list[tuple[float, BSpline]]  # the rolling toes' base pitch splines (:func:`roll_splines`)
+    splines: tuple[BSpline, BSpline, BSpline]
     selection: Selection
     objective: str
     P_fixed: np.ndarray
@@ -82,37 +79,6 @@ class JumpNLP:
         P = np.array(self.P_fixed, float)
         P[1:-1] = self.variables.unpack(w)["P"]
         return P
-
-    def roll_pitch(self, w: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """(p, pd, pdd) (len(t) x 3) of the rolling toes' base pitch at times t (zero outside the windows)."""
-        c, out, off = self.variables.unpack(w)["roll"], np.zeros((len(t), 3)), 0
-        for t0, sp_ in self.rolls:
-            inside = (t >= t0 - 1e-9) & (t <= t0 + sp_.duration + 1e-9)
-            for k in range(3):
-                out[inside, k] = sp_.basis(np.clip(t[inside] - t0, 0, sp_.duration), k) @ c[off:off + sp_.n_control]
-            off += sp_.n_control
-        return out
-
-    def path_motion(self, layer: GPLayer | IdentityLayer, w: np.ndarray, t: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(y, yd, ydd), each (len(t) x D), of solution ``w`` along its path at times t."""
-        sp_ = self.splines[0]
-        m = layer.motion(np.hstack([sp_.evaluate(self.control_points(w), t, k) for k in range(3)]))
-        return np.asarray(m.y, float), np.asarray(m.yd, float), np.asarray(m.ydd, float)
-
-    def joint_motion(self, robot: JumpRobot, layer: GPLayer | IdentityLayer, w: np.ndarray, t: np.ndarray,
-                     phases: Phases) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(y, yd, ydd), each (len(t) x D), of the motion of solution ``w`` at times t: the path's, with
-        the legs closed sideways through the feet in contact (:attr:`.robot.JumpRobot.closure`)."""
-        Y = [np.array(v) for v in self.path_motion(layer, w, t)]
-        on = (t <= phases.takeoff + 1e-9) | (t >= phases.touchdown - 1e-9)
-        if on.any():
-            shift = np.where(t[on] >= phases.touchdown - 1e-9, self.variables.unpack(w)["y_L"][0], 0.0)
-            closed = robot.closure.map(int(on.sum()))(*(v[on].T for v in Y), phases.flat(t[on])[None, :].astype(float),
-                                                     shift[None, :])
-            for k in range(3):
-                Y[k][on] = np.asarray(closed[k]).T
-        return Y[0], Y[1], Y[2]
 
     def family_rows(self, name: str) -> slice:
         """The rows of row family ``name`` in the constraint vector (empty if it has none)."""
@@ -138,20 +104,6 @@ def tube_times(settings: JumpSettings, phases: Phases, layer: GPLayer | Identity
     return np.linspace(0.0, T, max(2, int(round(T / settings.tube_spacing)) + 1))[1:-1]
 
 
-def roll_splines(settings: JumpSettings, phases: Phases) -> list[tuple[float, BSpline]]:
-    """(start, spline) of the rolling toes' base pitch in each rolling window, a knot every
-    ``roll_spacing``: with a contact sample as often (:func:`rolling_samples`; by default every 1 kHz
-    time) the pitch is collocated on the export's grid, where the toe point alone balances the base rows."""
-    h = settings.roll_spacing
-    return [(a, BSpline(max(4, int(round((b - a) / h)) + 3), b - a)) for a, b in phases.pivot_windows()]
-
-
-def rolling_samples(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
-    """Every ``roll_spacing`` (on the 1 kHz grid) while the toes roll: contact samples, always in the NLP."""
-    t = np.round(np.arange(0.0, phases.duration, settings.roll_spacing) * rate_hz) / rate_hz
-    return np.unique(t[phases.pivot(t)])
-
-
 def contact_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
     """Contact sample times on the export's 1 kHz grid: every ``sample_spacing``, at the splines'
     breakpoints (their accelerations kink there) and just inside each unloaded interval of the
@@ -160,7 +112,8 @@ def contact_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float =
     T = ph.duration
     if s.sample_spacing <= 0:
         return np.zeros(0)
-    knots = BSpline(s.n_control, T).breakpoints
+    knots = np.concatenate([BSpline(s.n_control, T).breakpoints, BSpline(s.n_base_stance, ph.takeoff).breakpoints,
+                            ph.touchdown + BSpline(s.n_base_land, T - ph.touchdown).breakpoints])
     sw = ph.switch_samples(eps=1.0 / rate_hz)
     t = np.concatenate([np.arange(0.0, T, s.sample_spacing), knots, sw])
     t = np.unique(np.round(t * rate_hz) / rate_hz)
@@ -181,12 +134,12 @@ def flight_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 
 
 
 def build_nlp(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
-              settings: JumpSettings, P_fixed: np.ndarray, hinge_standing: float, objective: str = "distance",
+              settings: JumpSettings, P_fixed: np.ndarray, objective: str = "distance",
               selection: Selection | None = None, P_range: np.ndarray | None = None) -> JumpNLP:
     """The NLP of one phase of the solve (module doc); ``P_fixed`` holds the spline's end points
-    (and the free points' centres), ``hinge_standing`` the toe joint's standing angle, ``selection``
-    the chosen rows and samples (default: every node row, the tube of a latent path, no samples),
-    ``P_range`` the free control points' half-widths around ``P_fixed`` (None: unbounded)."""
+    (and the free points' centres), ``selection`` the chosen rows and samples (default: every
+    node row, the tube of a latent path, no samples), ``P_range`` the free control points'
+    half-widths around ``P_fixed`` (None: unbounded)."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
     s, ph = settings, phases
@@ -195,32 +148,26 @@ def build_nlp(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str
     tc = np.concatenate([grid["stance"], grid["land"]])
     nC, nk = len(tc), len(robot.unmirrored)
     sel = Selection.every_node_row(nC, nk, tube_times(s, ph, layer)) if selection is None else selection
-    tr = rolling_samples(s, ph)
-    sel = sel.merged(Selection(np.zeros_like(sel.node_torque), np.zeros_like(sel.node_polygon), tr,
-                               np.zeros((len(tr), nk)), np.zeros((len(tr), sel.node_polygon.shape[1])),
-                               np.zeros(0), np.zeros((0, nk)), np.zeros(0)))
     if sel.node_torque.shape != (nC, nk):
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
     if len(sel.tube) and not isinstance(layer, GPLayer):
         raise ValueError("the selection has tube points but the layer has no sigma^2 (a joint path)")
-    splines = (BSpline(s.n_control, T),)
-    rolls = roll_splines(s, ph)
-    var = JumpVariables.layout(s.n_control, layer.latent_dim, nC, len(grid["flight"]),
-                               len(sel.contact), len(sel.flight), sum(sp_.n_control for _, sp_ in rolls))
-    w = Wiring(robot, layer, blocks, ph, s, sel, var, splines, rolls, np.asarray(P_fixed, float), float(hinge_standing),
-               grid)
+    splines = (BSpline(s.n_control, T), BSpline(s.n_base_stance, ph.takeoff), BSpline(s.n_base_land, T - ph.touchdown))
+    var = JumpVariables.layout(s.n_control, layer.latent_dim, s.n_base_stance, s.n_base_land, nC, len(grid["flight"]),
+                               len(sel.contact), len(sel.flight))
+    w = Wiring(robot, layer, blocks, ph, s, sel, var, splines, np.asarray(P_fixed, float), grid)
     for wire in families():
         wire(w)
     nlp = SparseNLP(var.n, w.families, _objective(var, P_fixed, objective))
     names, times, comps = np.array(w.names), np.array(w.times, float), np.array(w.comps, np.int64)
-    lbg, ubg = _row_bounds(names, comps, robot, s)
+    lbg, ubg = _row_bounds(names, comps, times, robot, s, ph)
     lbx, ubx = _variable_bounds(var, ph, tc, sel.contact)
     if P_range is not None:  # the free control points within +-P_range of P_fixed's (joint range)
         P0 = np.asarray(P_fixed, float)[1:-1]
         half = np.broadcast_to(np.asarray(P_range, float), P0.shape)
         lbx[var.slices["P"]], ubx[var.slices["P"]] = (P0 - half).ravel(), (P0 + half).ravel()
     nsub = max(1, int(s.flight_substeps))
-    return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, splines, rolls, sel, objective,
+    return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, splines, sel, objective,
                    np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, nsub), nsub)
 
 
@@ -236,13 +183,14 @@ def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Fu
     return ca.Function("jump_objective", [w], [f])
 
 
-def _row_bounds(names: np.ndarray, comps: np.ndarray, robot: JumpRobot, s: JumpSettings) -> tuple[np.ndarray, np.ndarray]:
-    bounds = {"dynamics": (0, 0), "flight_base": (0, 0), "flight_pitch": (0, 0), "heel_height": (-s.ground_tolerance, np.inf),
+def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: JumpRobot, s: JumpSettings,
+                ph: Phases) -> tuple[np.ndarray, np.ndarray]:
+    bounds = {"dynamics": (0, 0), "flight_base": (0, 0), "flight_pitch": (0, 0), "ball_height": (-s.ball_tolerance, np.inf),
+              "toe_position": (-s.foot_tolerance, s.foot_tolerance), "heel_height": (-s.contact_tolerance, np.inf),
               "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "takeoff": (0, 0),
               "pitch_integration": (0, 0), "flight_clearance": (0, np.inf), "touchdown_position": (0, 0),
               "impact": (0, 0), "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "pitch_rate": (0, 0),
-              "toes_height": (-s.ground_tolerance, np.inf), "anchor_switch": (0, 0), "roll_switch": (0, 0), "leg_opening": (0, 0),
-              **{k: (0, np.inf) for k in ("cop_front", "cop_front_ball", "cop_heel", "cop_ball", "cop_pad")}}
+              **{k: (0, np.inf) for k in ("cop_front", "cop_heel", "cop_ball", "cop_pad")}}
     lbg, ubg = np.zeros(len(names)), np.zeros(len(names))
     for k, (lo, hi) in bounds.items():
         sel = names == k
@@ -251,6 +199,12 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, robot: JumpRobot, s: JumpS
     act, scale = robot.active, robot.torque_scale
     lbg[torque] = (robot.limits.tau_min[act][comps[torque]] + TORQUE_BACKOFF) / scale[comps[torque]]
     ubg[torque] = (robot.limits.tau_max[act][comps[torque]] - TORQUE_BACKOFF) / scale[comps[torque]]
+    # the contact schedule: a loaded heel stays on the ground, a loaded ball within the tolerance
+    heel, ball = names == "heel_height", names == "ball_height"
+    ubg[heel] = np.where(ph.loaded("heel", times[heel]), s.contact_tolerance, np.inf)
+    loaded = ph.loaded("ball", times[ball])
+    lbg[ball] = np.where(loaded, -s.contact_tolerance, -s.ball_tolerance)
+    ubg[ball] = np.where(loaded, s.contact_tolerance, np.inf)
     return lbg, ubg
 
 
@@ -263,8 +217,6 @@ def _variable_bounds(var: JumpVariables, ph: Phases, tc: np.ndarray, t_samples: 
         ub = ubx[var.slices[name]].reshape(len(times), EDGES)  # a view
         for k, point in enumerate(POINTS):
             ub[~ph.loaded(point, times), 2 * k:2 * k + 2] = 0.0
-    ub = ubx[var.slices["lam"]].reshape(len(tc), EDGES)
-    ub[ph.pivot(tc)] = 0.0  # the rolling toes' nodes carry no rows: their 1 kHz samples do
     lbx[var.slices["lam_impact"]] = 0.0
     imp_ub = ubx[var.slices["lam_impact"]]
     t_td = np.array([ph.touchdown])

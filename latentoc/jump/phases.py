@@ -13,12 +13,9 @@ The landing is "settled" (Eq. 36's COM-in-polygon constraint applies) from the f
 training frame after touchdown at which the projected COM is inside the feet's polygon.
 Contact schedule: the heel and the ball carry force only while they are on the ground in the
 training motion (within ``CONTACT_HEIGHT`` of their standing height): the heel until
-``heel_off`` (0.192 s on the paper's jump) and again from ``heel_strike`` (0.775 s), the ball
-until ``ball_off`` (0.258 s) and from ``ball_strike`` (0.708 s). Three contact modes follow:
-while the heel is loaded the foot lies flat on heel and ball (:meth:`Phases.flat`); then the toes
-lie flat on the toe point, the pad and, while it is loaded, the ball; between the ball's rise and
-the takeoff (and from the touchdown to the ball's strike) the toes roll on the toe point alone
-(:meth:`Phases.pivot`), as the captured push-off and landing do.  A fixed contact sequence keeps the NLP free of complementarity rows,
+``heel_off`` (0.200 s on the paper's jump) and again from ``heel_strike`` (0.792 s), the ball
+until ``ball_off`` (0.267 s) and from ``ball_strike`` (0.717 s); the toe tip carries force in
+every contact node.  A fixed contact sequence keeps the NLP free of complementarity rows,
 whose degenerate multipliers stalled Ipopt (measured in issue 6).
 Nodes: ``n_stance`` on [0, t_to], ``n_flight`` on [t_to, t_td], ``n_land`` on [t_td, T]
 (the phase boundaries appear in both neighbouring phases).
@@ -50,53 +47,12 @@ class Phases:
     ball_strike: float | None = None
     heel_strike: float | None = None
 
-    def flat(self, t: np.ndarray) -> np.ndarray:
-        """Whether the foot lies flat (the heel loaded) at contact times ``t``."""
-        t = np.asarray(t, float)
-        if self.heel_off is None or self.heel_strike is None:
-            return np.zeros(t.shape, bool)
-        return (t <= self.heel_off + 1e-9) | (t >= self.heel_strike - 1e-9)
-
-    def pivot(self, t: np.ndarray) -> np.ndarray:
-        """Whether the toes roll on the toe point (after the ball rises, before it strikes) at contact
-        times ``t``; at the windows' inner ends (the ball's switches) the toes still lie flat."""
-        t = np.asarray(t, float)
-        if self.ball_off is None or self.ball_strike is None:
-            return np.zeros(t.shape, bool)
-        return ((t > self.ball_off + 1e-9) & (t <= self.takeoff + 1e-9)) | \
-            ((t >= self.touchdown - 1e-9) & (t < self.ball_strike - 1e-9))
-
-    def pivot_windows(self) -> list[tuple[float, float]]:
-        """The stance's and the landing's rolling windows (empty ones left out)."""
-        if self.ball_off is None or self.ball_strike is None:
-            return []
-        return [(a, b) for a, b in ((self.ball_off, self.takeoff), (self.touchdown, self.ball_strike)) if b > a + 1e-9]
-
-    def switches(self) -> np.ndarray:
-        """The times the heel leaves or strikes the ground: the base's anchor changes between the flat
-        foot and the flat toes."""
-        if self.heel_off is None or self.heel_strike is None:
-            return np.zeros(0)
-        return np.array([self.heel_off, self.heel_strike])
-
-    def roll_switches(self) -> np.ndarray:
-        """The times the toes start or stop rolling on the toe point (the ball rises, strikes)."""
-        if self.ball_off is None or self.ball_strike is None:
-            return np.zeros(0)
-        t = np.array([self.ball_off, self.ball_strike])
-        return t[((t > 1e-9) & (t < self.takeoff - 1e-9)) | ((t > self.touchdown + 1e-9) & (t < self.duration))]
-
     def loaded(self, point: str, t: np.ndarray) -> np.ndarray:
         """Whether ``point`` ("heel", "ball", "toe" or "pad": the toes') may carry force at contact
-        times ``t``: the heel and ball by the schedule, the toe point whenever the foot is not flat,
-        the pad while the toes lie flat."""
+        times ``t``."""
         t = np.asarray(t, float)
-        if self.heel_off is None:
+        if point in ("toe", "pad") or self.heel_off is None:
             return np.ones(t.shape, bool)
-        if point == "toe":
-            return ~self.flat(t)
-        if point == "pad":
-            return ~self.flat(t) & ~self.pivot(t)
         off, strike = {"heel": (self.heel_off, self.heel_strike), "ball": (self.ball_off, self.ball_strike)}[point]
         assert off is not None and strike is not None  # the schedule is whole or absent
         return (t <= off + 1e-9) | (t >= strike - 1e-9)

@@ -28,8 +28,6 @@ from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, resolve_tube
-from .base import base_to_freeflyer
-from .cleaning import HINGE, PlantedTraining, plantable, planted_training
 from .contact import POINTS, FootGeometry, foot_points
 from .path import METHODS, joint_range_path, latent_path
 from .phases import Phases, training_phases
@@ -43,7 +41,7 @@ from .training import JumpTraining, antisymmetric_centre, jump_model, training_j
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
            "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
 
-PATH_SMOOTHING = 0.0  # weight of int ||x''||^2 dt in the initial latent path fit
+PATH_SMOOTHING = 1e-3  # weight of int ||x''||^2 dt in the initial latent path fit
 
 
 @dataclass(eq=False)
@@ -60,12 +58,10 @@ class JumpSetup:
     init: dict
     distance_training: float
     sym: SymbolicModel
-    planted: PlantedTraining  # what planting the feet changed in the captured jump
     _blocks: dict = field(default_factory=dict, repr=False)
 
     def robot(self, mu: float) -> JumpRobot:
-        return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)),
-                               self.smap.learned_names.index(HINGE))
+        return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)))
 
     def blocks(self, robot: JumpRobot, layer: GPLayer | IdentityLayer | None = None) -> dict[str, RobotBlock]:
         """The row families' blocks for ``layer`` (default: the GP layer's latent dimension),
@@ -95,20 +91,14 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     """Model, GPDM, phases, feet, torque limits and training start. ``stride``: the GPDM learns
     every ``stride``-th captured frame (120 Hz) of each jump."""
     model, smap = jump_model()
-    captured = training_jumps(training)
-    geom = FootGeometry.from_standing(model, captured[0].Q[0])
-    phases = training_phases(model, captured[0], geom=geom)
-    schedules = [training_phases(model, c, geom=geom) for c in captured]
-    if not plantable(schedules[0]):
-        raise ValueError("the training jump's contact schedule is not whole (heel, ball, takeoff, touchdown)")
-    # of every jump of the take, those whose schedule is whole (three are cut in mid-motion)
-    planted = [planted_training(model, smap, c, ph, geom) for c, ph in zip(captured, schedules) if plantable(ph)]
-    trs = [p.training for p in planted]
+    trs = training_jumps(training)
     tr = trs[0]
     if not (isinstance(stride, (int, np.integer)) and not isinstance(stride, bool) and 1 <= stride <= len(tr.t) // 4):
         raise ValueError(f"training stride must be an integer from 1 to {len(tr.t) // 4} (frames), got {stride!r}")
     Ys = [t.Y[::stride] for t in trs]
     gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    phases = training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
     loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits = estimate_training_dynamics(model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded,
@@ -121,12 +111,9 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     P_joint = BSpline(n_control, tr.duration).fit(tr.t, tr.Y)
     bx = _toe_x(model, tr.Q, geom)
     td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
-    k = smap.learned_names.index(HINGE)
-    init = {"P": P, "P_joint": P_joint, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:])),
-            "y_L": float(planted[0].landing_shift[1]),
-            "hinge_standing": float(tr.Y[0, k])}
+    init = {"P": P, "P_joint": P_joint, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
     return JumpSetup(model, smap, tr, gp, phases, geom, limits, init, float(np.median(bx[td:]) - bx[0]),
-                     SymbolicModel(model), planted[0])
+                     SymbolicModel(model))
 
 
 def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: float, keep: np.ndarray) -> np.ndarray:
@@ -170,8 +157,9 @@ _TOML_NAMES = {"mu": "friction"}  # JumpSettings field -> its [options] key
 #: ranges of the JumpSettings fields in [options] (lo, hi, lo_open); a field not listed has its type only
 RANGES: dict[str, tuple[float | None, float | None, bool]] = {
     "mu": (0.0, None, True), "n_stance": (2, None, False), "n_flight": (2, None, False), "n_land": (2, None, False),
-    "ground_tolerance": (0.0, None, False), "flight_substeps": (1, None, False),
-    "tube_spacing": (0.0, None, True), "sample_spacing": (0.0, None, False), "roll_spacing": (0.001, None, False),
+    "n_base_stance": (4, None, False), "n_base_land": (4, None, False), "foot_tolerance": (0.0, None, False),
+    "ball_tolerance": (0.0, None, False), "contact_tolerance": (0.0, None, False), "flight_substeps": (1, None, False),
+    "tube_spacing": (0.0, None, True), "sample_spacing": (0.0, None, False),
     "exchange_rounds": (1, None, False)}
 
 
@@ -296,15 +284,6 @@ def _violations(r: dict[str, Any], checks: dict[str, float], mu: float) -> dict[
             "dynamics_bw": checks["max_dynamics_residual"]}
 
 
-def _training_on(js: JumpSetup, t: np.ndarray) -> np.ndarray:
-    """The (planted) training jump's configurations at times t (linear in its coordinates): the
-    initial motion a view shows beside the optimised one."""
-    tr = js.training
-    Z = np.column_stack([tr.base, tr.Y])
-    Zt = np.column_stack([np.interp(t, tr.t, Z[:, j]) for j in range(Z.shape[1])])
-    return js.smap.to_full(Zt[:, 3:], base_to_freeflyer(Zt[:, :3])[0])
-
-
 def _joint_range(problem: Problem, method: str, joint_range_deg: float | None) -> float | None:
     """The joint range (deg) of ``method`` (None for the latent path); a SolveError for an unknown
     method or a bad range, before any work."""
@@ -370,7 +349,6 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     r.pop("settings", None)  # solve_jump's copy of the JumpSettings: jump_settings above
     r.update(checks)
     r["violations"] = _violations(r, checks, s.mu)
-    traj["q_initial"] = _training_on(js, traj["t"])
     traj["P"] = traj.pop("control_points")  # the result schema's names
     if "latent" in traj:
         traj["x"] = traj.pop("latent")

@@ -6,7 +6,7 @@ node's other inputs, so they compile once per robot.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
@@ -21,9 +21,6 @@ from .training import RIGHT_TOE, TOE
 from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]  # x force, z force, y moment of the base rows
-CLOSURE_STEPS = 3  # Newton steps of the legs' sideways closure (:meth:`JumpRobot.closure`)
-#: the bodies a contact phase's base is anchored on: their (front, back) points, both on the ground
-ANCHORS = {"toes": ("toe", "pad"), "foot": ("ball", "heel")}
 
 
 @dataclass(eq=False)
@@ -36,9 +33,6 @@ class JumpRobot:
     limits: TrainingDynamics
     mu: float
     mass: float
-    hinge: int  # learned index of the toe joint: the hinge between the anchors (:meth:`anchored`)
-    lateral: tuple[int, int] = (0, 1)  # learned indices of the hip's joints that close the leg sideways (:meth:`closure`)
-    _anchored: dict = field(default_factory=dict, repr=False)
 
     @property
     def weight(self) -> float:
@@ -92,93 +86,6 @@ class JumpRobot:
         return np.setdiff1d(np.arange(len(a)), right)
 
     # ------------------------------------------------------------- symbolic pieces
-    def anchored(self, anchor: str) -> ca.Function:
-        """(y, yd, ydd, x_pin) -> (b, bd, bdd): the sagittal base that lays body ``anchor`` flat on the
-        ground: "toes" (the toe and pad points level, the toe point at (x_pin, 0)) or "foot" (the
-        heel and ball level, the ball where it is when the toes lie flat with the toe point at
-        x_pin). The two points in the base frame (base at the origin, unpitched) fix the pitch that
-        levels them, then the front one's ground point the position."""
-        if anchor not in self._anchored:
-            front, back = ANCHORS[anchor]
-            n = self.n_learned
-            y, yd, ydd = (ca.SX.sym(k, n) for k in ("y", "yd", "ydd"))
-            x_pin = ca.SX.sym("x_pin")
-            q0 = ca.vertcat(0, 0, 0, 0, 0, 0, 1, ca.DM(self.E) @ y)
-            P = points_function(self.sym, self.geom)(q0)
-            f, r = P[:, POINTS.index(front)], P[:, POINTS.index(back)]
-            p = ca.atan2(f[2] - r[2], f[0] - r[0])
-            c, s = ca.cos(p), ca.sin(p)
-            x_front = x_pin - (self.geom.ball_back if front == "ball" else 0.0)
-            b = ca.vertcat(x_front - (c * f[0] + s * f[2]), s * f[0] - c * f[2], p)
-            bd = ca.jtimes(b, y, yd)
-            bdd = ca.jtimes(b, y, ydd) + ca.jtimes(bd, y, yd)
-            self._anchored[anchor] = ca.Function(f"anchored_{anchor}", [y, yd, ydd, x_pin], [b, bd, bdd],
-                                                 ["y", "yd", "ydd", "x_pin"], ["b", "bd", "bdd"])
-        return self._anchored[anchor]
-
-    @cached_property
-    def rolling(self) -> ca.Function:
-        """(y, yd, ydd, x_pin, p, pd, pdd) -> (b, bd, bdd): the sagittal base pitched at p (rate pd,
-        acceleration pdd) with the toe point at (x_pin, 0): the toes rolling on it."""
-        n = self.n_learned
-        y, yd, ydd = (ca.SX.sym(k, n) for k in ("y", "yd", "ydd"))
-        x_pin, p, pd, pdd = (ca.SX.sym(k) for k in ("x_pin", "p", "pd", "pdd"))
-        q0 = ca.vertcat(0, 0, 0, 0, 0, 0, 1, ca.DM(self.E) @ y)
-        f = points_function(self.sym, self.geom)(q0)[:, POINTS.index("toe")]
-        c, s = ca.cos(p), ca.sin(p)
-        b = ca.vertcat(x_pin - (c * f[0] + s * f[2]), s * f[0] - c * f[2], p)
-        z, zd, zdd = ca.vertcat(y, p), ca.vertcat(yd, pd), ca.vertcat(ydd, pdd)
-        bd = ca.jtimes(b, z, zd)
-        bdd = ca.jtimes(b, z, zdd) + ca.jtimes(bd, z, zd)
-        return ca.Function("rolling_base", [y, yd, ydd, x_pin, p, pd, pdd], [b, bd, bdd],
-                           ["y", "yd", "ydd", "x_pin", "p", "pd", "pdd"], ["b", "bd", "bdd"])
-
-    @cached_property
-    def closure(self) -> ca.Function:
-        """(y, yd, ydd, flat, y_shift) -> (y, yd, ydd) with the two lateral hip joints closing the leg
-        through the planted foot: the anchor's two points (heel and ball on the flat foot, else toe
-        and pad) at their standing sideways positions shifted by y_shift, found by ``CLOSURE_STEPS``
-        Newton steps from the path's values (quadratic: the path's are within degrees of them); the
-        rates and accelerations are the time derivatives of that function of y. A sagittal base
-        leaves the points' y unchanged, so the closure needs no base."""
-        n = self.n_learned
-        y, yd, ydd = (ca.SX.sym(k, n) for k in ("y", "yd", "ydd"))
-        flat, shift = ca.SX.sym("flat"), ca.SX.sym("y_shift")
-        a, b = self.lateral
-        u = ca.SX.sym("u", 2)
-        yu = ca.vertcat(*[u[self.lateral.index(i)] if i in self.lateral else y[i] for i in range(n)])
-        P = points_function(self.sym, self.geom)(ca.vertcat(0, 0, 0, 0, 0, 0, 1, ca.DM(self.E) @ yu))
-        gy = self.geom.ground_y
-        r = flat * ca.vertcat(P[1, 0] - gy[0], P[1, 1] - gy[1]) + (1 - flat) * ca.vertcat(P[1, 2] - gy[2], P[1, 3] - gy[3])
-        r = r - shift
-        J = ca.jacobian(r, u)
-        step = ca.Function("closure_step", [u, y, flat, shift],
-                           [u - ca.vertcat(J[1, 1] * r[0] - J[0, 1] * r[1], J[0, 0] * r[1] - J[1, 0] * r[0])
-                            / (J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0])])
-        uk = ca.vertcat(y[a], y[b])
-        for _ in range(CLOSURE_STEPS):
-            uk = step(uk, y, flat, shift)
-        yc = ca.vertcat(*[uk[self.lateral.index(i)] if i in self.lateral else y[i] for i in range(n)])
-        ydc = ca.jtimes(yc, y, yd)
-        yddc = ca.jtimes(yc, y, ydd) + ca.jtimes(ydc, y, yd)
-        return ca.Function("leg_closure", [y, yd, ydd, flat, shift], [yc, ydc, yddc],
-                           ["y", "yd", "ydd", "flat", "y_shift"], ["yc", "ydc", "yddc"])
-
-    @cached_property
-    def opening(self) -> ca.Function:
-        """(y, yd, flat, y_shift) -> (r, rd): the anchor's two points' sideways offsets from their
-        closed positions (:meth:`closure`) and their rates, along the path itself: zero where the
-        contact begins or ends, so the closed legs and the free ones meet."""
-        n = self.n_learned
-        y, yd = ca.SX.sym("y", n), ca.SX.sym("yd", n)
-        flat, shift = ca.SX.sym("flat"), ca.SX.sym("y_shift")
-        P = points_function(self.sym, self.geom)(ca.vertcat(0, 0, 0, 0, 0, 0, 1, ca.DM(self.E) @ y))
-        gy = self.geom.ground_y
-        r = flat * ca.vertcat(P[1, 0] - gy[0], P[1, 1] - gy[1]) + (1 - flat) * ca.vertcat(P[1, 2] - gy[2], P[1, 3] - gy[3])
-        r = r - shift
-        return ca.Function("leg_opening", [y, yd, flat, shift], [r, ca.jtimes(r, y, yd)],
-                           ["y", "yd", "flat", "y_shift"], ["r", "rd"])
-
     def configuration(self, b, bd, bdd, y, yd, ydd):
         """Free-flyer (q, v, a) of the sagittal base (b, bd, bdd) and the joint motion."""
         E = ca.DM(self.E)

@@ -16,10 +16,13 @@ class JumpSettings:
     n_stance: int = 32  # contact nodes every 10 ms
     n_flight: int = 80  # flight nodes every 5 ms
     n_land: int = 62
-    ground_tolerance: float = 2e-4  # m an unloaded foot point may touch into the ground (where it is set down)
+    n_base_stance: int = 12  # control points of the stance's (x, z, pitch) base spline
+    n_base_land: int = 12
+    foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact
+    ball_tolerance: float = 0.02  # m an unloaded ball may sink below the ground (soft sole)
+    contact_tolerance: float = 0.01  # m a loaded heel or ball stays within this of the ground
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     tube_spacing: float = 0.005  # s between tube points
-    roll_spacing: float = 0.001  # s between the rolling toes' samples and pitch knots (collocation)
     sample_spacing: float = 0.005  # s between the contact and flight samples of phase 2 (0: none)
     exchange: bool = True  # sampled rows grow where the 1 kHz grid is violated (:mod:`.exchange`)
     exchange_rounds: int = 8
@@ -37,10 +40,13 @@ FIELD_DOCS: dict[str, str] = {
     'n_stance': 'contact nodes of the stance, every 10 ms',
     'n_flight': 'flight nodes, every 5 ms',
     'n_land': 'contact nodes of the landing, touchdown to the end',
-    'ground_tolerance': 'm an unloaded foot point may touch into the ground (where it is set down)',
+    'n_base_stance': "control points of the stance's (x, z, pitch) base spline",
+    'n_base_land': "control points of the landing's (x, z, pitch) base spline",
+    'foot_tolerance': 'm the toe tip may move from its ground point in contact',
+    'ball_tolerance': 'm an unloaded ball may sink below the ground (soft sole)',
+    'contact_tolerance': 'm a loaded heel or ball stays within this of the ground',
     'flight_substeps': 'trapezoid steps of the pitch rate per flight node interval',
     'tube_spacing': "s between the tube's points",
-    'roll_spacing': "s between the rolling toes' samples and pitch-spline knots (1 ms: the export's grid)",
     'sample_spacing': 's between the contact and flight samples of phase 2 (0: none)',
     'exchange': 'rows grow where the 1 kHz grid is violated (the exchange)',
     'exchange_rounds': 'solves of the exchange at the most',

@@ -97,8 +97,8 @@ class _Solve:
         self.t0 = self.clock.add(part, self.t0)
 
     def build(self, objective: str, selection: Selection) -> JumpNLP:
-        nlp = build_nlp(self.robot, self.layer, self.blocks, self.ph, self.s, self.start["P"], self.start["hinge_standing"],
-                        objective, selection, self.start.get("P_range"))
+        nlp = build_nlp(self.robot, self.layer, self.blocks, self.ph, self.s, self.start["P"], objective, selection,
+                        self.start.get("P_range"))
         self.lap("build_s")
         return nlp
 
@@ -123,16 +123,16 @@ class _Solve:
         s, st = self.s, self.start
         full = self.build("feasibility", Selection.every_node_row(s.n_stance + s.n_land, self.robot.unmirrored.size,
                                                                   self.tube))
-        x = initial_point(self.robot, self.layer, full, st["P"], st["x_L"], st["y_L"], self.ph.takeoff, st["t"], st["base"])
+        x = initial_point(self.robot, self.layer, full, st["P"], st["t"], st["base"], st["x_L"], self.ph.takeoff,
+                          self.ph.touchdown)
         self.lap("build_s")
         if not s.two_phase:
             return full, x, None
         traj, sr = self.check(full, x)
         seed = exchange.seed_selection(full, x, traj, sr, self.robot, self.ph, s.tube, self.tube)
-        # every row on the packaged grids: the anchored base is rigid, so between the nodes the motion
-        # is held only by the samples' rows
-        first = exchange.with_samples(full.selection.merged(seed), contact_sample_grid(s, self.ph),
-                                      flight_sample_grid(s, self.ph))
+        nodes = full.selection
+        first = nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
+                                       seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
         nlp1 = self.build("feasibility", first)
         x1, _ = carried_point(full, nlp1, x)
         run1 = self.run_ipopt(nlp1, x1, None, "phase 1 (feasible)")

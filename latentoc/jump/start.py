@@ -1,7 +1,8 @@
 """The jump's initial point: the training motion in the NLP's variables.
 
 The path is the setup's smoothed fit of the learned latent points (or of the training joints,
-:mod:`.path`); the contact phases' base is anchored (:meth:`.robot.JumpRobot.anchored`); the flight's takeoff state and pitch
+:mod:`.path`); the contact phases'
+base splines are least-squares fits of the captured base; the flight's takeoff state and pitch
 follow from the stance at takeoff (ballistic, :mod:`.flight`); the contact forces are the
 non-negative edge weights of the loaded points that best balance each node's base rows. The
 samples' variables (:func:`sample_values`) follow from the rest of a point, so a point can be
@@ -10,7 +11,6 @@ carried into an NLP with more samples.
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 from scipy.optimize import nnls
 
 from ..latent.gp_layer import GPLayer, IdentityLayer
@@ -22,37 +22,32 @@ from .robot import JumpRobot
 __all__ = ["initial_point", "sample_values", "balanced_forces"]
 
 
-def initial_roll(nlp: JumpNLP, t: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-    """Control points of the rolling toes' pitch splines: least-squares fits of the training base
-    pitch (t, pitch), interpolated by a cubic spline onto each window's knots."""
-    f = CubicSpline(t, pitch)
-    out = []
-    for t0, sp_ in nlp.rolls:
-        tk = t0 + np.linspace(0.0, sp_.duration, 4 * sp_.n_control)
-        out.append(sp_.fit(tk - t0, f(tk), fix_ends=False)[:, 0])
-    return np.concatenate(out) if out else np.zeros(0)
+def _joint_motion(layer: GPLayer | IdentityLayer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.ndarray]:
+    Z = np.hstack([sp_.evaluate(P, t, k) for k in range(3)])
+    m = layer.motion(Z)
+    return [m.y.T, m.yd.T, m.ydd.T]  # n x K each
 
 
-def initial_point(robot: JumpRobot, layer: GPLayer | IdentityLayer, nlp: JumpNLP, P: np.ndarray, x_L: float,
-                  y_L: float, takeoff: float, t: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """The training start (module doc) of ``nlp`` from the path's control points P, the landing
-    toe point x_L, the landing feet's sideways shift y_L and the training base (t, base) for the
-    rolling toes' pitch."""
+def initial_point(robot: JumpRobot, layer: GPLayer | IdentityLayer, nlp: JumpNLP, P: np.ndarray, t: np.ndarray, base: np.ndarray,
+                  x_L: float, takeoff: float, touchdown: float) -> np.ndarray:
+    """The training start (module doc) of ``nlp`` from the path's control points P, the captured
+    base (t, base) and the landing toe point x_L."""
     var = nlp.variables
-    roll = initial_roll(nlp, t, base[:, 2])
-    w0 = var.pack({"P": P[1:-1], "x_L": x_L, "y_L": y_L, "roll": roll})
+    sp_, sps, spl = nlp.splines
+    st, la = t <= takeoff + 1e-9, t >= touchdown - 1e-9
+    base_s = sps.fit(t[st], base[st], fix_ends=False)
+    base_l = spl.fit(t[la] - touchdown, base[la], fix_ends=False)
     # flight: the ballistic motion from the stance's state at takeoff
     fns = flight_functions(robot.sym, robot.smap)
     t_to = np.array([takeoff])
-    y_to, yd_to, ydd_to = (v.T for v in nlp.path_motion(layer, w0, t_to))
-    p_to = nlp.roll_pitch(w0, t_to)[0]
-    b_to, bd_to, _ = (np.asarray(v) for v in robot.rolling(y_to, yd_to, ydd_to, 0.0, *p_to))
+    y_to, yd_to, _ = _joint_motion(layer, sp_, P, t_to)
+    b_to, bd_to = (sps.evaluate(base_s, t_to, k).T for k in range(2))
     c, cd, L = (np.asarray(v).ravel() for v in fns["momentum"](y_to, yd_to, b_to, bd_to))
     tau_fine = nlp.tau_fine
-    Yf = [v.T for v in nlp.path_motion(layer, w0, takeoff + tau_fine)]
+    Yf = _joint_motion(layer, sp_, P, takeoff + tau_fine)
     bb = ballistic_base(fns, Yf[0], Yf[1], Yf[2], tau_fine, b_to, bd_to, y_to, yd_to)
     nC = var.shapes["lam"][0]
-    x0 = var.pack({"P": P[1:-1], "x_L": x_L, "y_L": y_L, "roll": roll,
+    x0 = var.pack({"P": P[1:-1], "base_stance": base_s, "base_land": base_l, "x_L": x_L,
                    "lam": np.full((nC, EDGES), 1.0 / (2 * EDGES)), "lam_impact": np.full(EDGES, 0.5), "c_to": c, "cd_to": cd,
                    "L_to": L, "pitch_flight": bb[0][2, ::nlp.flight_substeps]})
     return sample_values(nlp, balanced_forces(nlp, np.clip(x0, nlp.lbx, nlp.ubx)))
@@ -72,14 +67,9 @@ def _affine(nlp: JumpNLP, x: np.ndarray, index: np.ndarray, rows: np.ndarray) ->
     return c, A
 
 
-def _dynamics_rows(nlp: JumpNLP, family: str, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The base rows of ``family`` (K' x 3 positions in g) and the nodes (of those at ``times``) they
-    belong to: a node without rows (the rolling toes' contact nodes) is left out."""
+def _dynamics_rows(nlp: JumpNLP, family: str) -> np.ndarray:
     sl = nlp.family_rows(family)
-    rows = (sl.start + np.flatnonzero(nlp.row_names[sl] == "dynamics")).reshape(-1, 3)
-    at = nlp.row_times[rows[:, 0]]
-    nodes = np.array([int(np.argmin(np.abs(times - a))) for a in at], int)
-    return rows, nodes
+    return (sl.start + np.flatnonzero(nlp.row_names[sl] == "dynamics")).reshape(-1, 3)
 
 
 def balanced_forces(nlp: JumpNLP, w: np.ndarray, family: str = "contact", block: str = "lam") -> np.ndarray:
@@ -90,14 +80,11 @@ def balanced_forces(nlp: JumpNLP, w: np.ndarray, family: str = "contact", block:
     x = np.array(w, float)
     if lam.size == 0:
         return x
-    times = np.concatenate([nlp.grid["stance"], nlp.grid["land"]]) if block == "lam" else nlp.selection.contact
-    rows, nodes = _dynamics_rows(nlp, family, times)
-    x[lam.ravel()] = 0.0
-    c, A = _affine(nlp, x, lam[nodes], rows)
-    loaded = nlp.ubx[lam[nodes]] > 0
-    for j, node in enumerate(nodes):
-        if loaded[j].any():  # (scipy's nnls fails on an empty matrix)
-            x[lam[node, loaded[j]]] = nnls(A[j][:, loaded[j]], -c[j])[0]
+    c, A = _affine(nlp, x, lam, _dynamics_rows(nlp, family))
+    loaded = nlp.ubx[lam] > 0
+    for j in range(c.shape[0]):
+        x[lam[j]] = 0.0
+        x[lam[j, loaded[j]]] = nnls(A[j][:, loaded[j]], -c[j])[0]
     return x
 
 

@@ -16,8 +16,8 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   each (symmetric) foot; from it the minimum normal force, the maximum friction ratio
   |fx|/fz and the centre-of-pressure margin inside the foot (heel..toe); with ``loaded``
   (n, 4: whether the heel, ball, toe and pad may carry force, the contact schedule) also
-  ``cop_margin_loaded``, between the rearmost loaded point (the heel, else the ball, else a
-  ``toe_pad`` behind the toe point, else the toe point) and the foremost (the toe point, else the ball);
+  ``cop_margin_loaded``, against the rearmost loaded point (the heel, else the ball, else a
+  ``toe_pad`` behind the toe tip);
 * ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
   projected COM against the support polygon (:mod:`latentoc.support_polygon`) during landing
   (COM once settled);
@@ -28,14 +28,9 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   ground-projected speed of both toe tips, ``|J_xy v|`` from the frame Jacobians (twice the jump
   distance only if the feet never move backwards or sideways);
 * with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights);
-* contact kinematics of the exported point forces' points (heel, ball, toe, pad; a point is
-  *loaded* where its normal force exceeds :data:`LOADED` of body weight): ``max_loaded_travel``,
-  the farthest any loaded point moves along the ground (x, y) from where its loaded stretch began,
-  ``max_loaded_travel_x`` the same in x alone, ``max_loaded_height`` its largest |z|,
-  ``min_unloaded_height`` the lowest any point goes while it carries no load (in contact: the
-  ground is z = 0), ``ground_work_positive`` and ``ground_work`` the positive and the net work of
-  the contact forces on the body (both feet: the integral of sum f . v over the points, J): a
-  fixed ground does none, friction on a sliding point can only take energy out;
+* ``toe_slip``: the largest horizontal travel (max - min of x) of the toe tip within one contact
+  phase (stance, landing), and ``max_toe_height``: its largest |z| in contact; both 0 for a
+  toe pinned to the ground, at most ``foot_tolerance`` for the spline base;
 * ``toe_displacement``: the toe tip's forward travel from the first to the last sample, the jump
   distance measured on the motion itself (the NLP's objective is its landing ground point x_L).
 """
@@ -44,12 +39,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import FRAMES, POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
+from .contact import TOE_PAD, FootGeometry, foot_points, point_jacobians
 from ..support_polygon import feet_polygon
 from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
-
-LOADED = 0.01  # of body weight: a point pushing harder than this is loaded
 
 
 def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -79,13 +72,12 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     ids = {n: model.getFrameId(n) for n in (TOE, RIGHT_TOE)}
     act = tmax - tmin > 1e-6
     points = np.asarray(arrays["point_forces"]) if "point_forces" in arrays else None
-    geom = FootGeometry(heel_off, np.asarray(arrays["pad_offset"]), np.asarray(arrays.get("toe_offset", np.zeros(3))))
+    geom = FootGeometry(heel_off, np.asarray(arrays["pad_offset"]))
     loaded = np.asarray(arrays["loaded"]).astype(bool) if "loaded" in arrays else None
     n = len(t)
     nan = np.full(n, np.nan)
     out = {"torque": np.zeros((n, int(act.sum()))), "residual": np.zeros(n), "lateral": np.zeros(n),
            "symmetric_torque": np.zeros(n), "feet_speed": np.zeros(n), "toe_xz": np.zeros((n, 2)),
-           "points": np.zeros((n, len(POINTS), 3)), "point_velocity": np.zeros((n, len(POINTS), 3)),
            **{k: nan.copy() for k in ("normal", "friction", "cop", "cop_loaded", "point_cone")},
            "zmp": np.full((n, 4), np.nan), "com": np.full((n, 4), np.nan)}
     for i in range(n):
@@ -101,7 +93,6 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         out["toe_xz"][i] = d.oMf[ids[TOE]].translation[[0, 2]]
-        out["points"][i], out["point_velocity"][i] = _left_points(model, d, geom, v)
         gen: np.ndarray
         if not contact[i]:
             gen = np.zeros(model.nv)
@@ -123,13 +114,11 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         fx, _, fz, _, my, _ = sagittal_contact_wrench(JL + JR, tau)
         out["normal"][i], out["friction"][i] = fz, mu * fz - abs(fx)
         heel, ball, toe, _ = foot_points(model, d, geom).T
-        o = d.oMf[ids[TOE]].translation  # the wrench's point: the toe frame's origin
-        cop = o[0] - (my + o[2] * fx) / max(fz, 1e-9)  # on the ground
+        cop = toe[0] - (my + toe[2] * fx) / max(fz, 1e-9)  # on the ground, below the toe tip
         out["cop"][i] = min(cop - heel[0], toe[0] - cop)
-        if loaded is not None:  # between the rearmost loaded point (heel, ball, pad, toe) and the foremost
-            back = heel[0] if loaded[i, 0] else ball[0] if loaded[i, 1] else toe[0] - toe_pad if loaded[i, 3] else toe[0]
-            front = toe[0] if loaded[i, 2] else ball[0]
-            out["cop_loaded"][i] = min(cop - back, front - cop)
+        if loaded is not None:  # the rearmost loaded point: heel, ball or the toe pad
+            back = heel[0] if loaded[i, 0] else (ball[0] if loaded[i, 1] else toe[0] - toe_pad)
+            out["cop_loaded"][i] = min(cop - back, toe[0] - cop)
         if t[i] >= t_td - 1e-9:
             As, bs = feet_polygon(heel, toe)
             c = pin.centerOfMass(model, d, q)
@@ -138,42 +127,6 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
             if t[i] >= t_settle - 1e-9:
                 out["com"][i] = -(As @ c[:2] + bs)
     return out
-
-
-def _left_points(model: pin.Model, d: pin.Data, geom: FootGeometry, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """World positions (4 x 3) and velocities of the left foot's points (frames and joint Jacobians placed)."""
-    P = foot_points(model, d, geom).T
-    V = np.zeros_like(P)
-    for k, point in enumerate(POINTS):
-        fid = model.getFrameId(FRAMES[point])
-        J = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
-        V[k] = (J[:3] - pin.skew(P[k] - d.oMf[fid].translation) @ J[3:]) @ v
-    return P, V
-
-
-def contact_kinematics(t: np.ndarray, points: np.ndarray, velocity: np.ndarray, forces: np.ndarray, contact: np.ndarray,
-                       weight: float) -> dict[str, float]:
-    """Where the loaded points are and how they move, and the work the ground does (module doc).
-    ``points``, ``velocity``: (n, 4, 3) of the left foot; ``forces``: (n, 4, 2) its (fx, fz)."""
-    loaded = (forces[:, :, 1] > LOADED * weight) & contact[:, None]
-    travel = travel_x = height = 0.0
-    for k in range(points.shape[1]):
-        on = loaded[:, k]
-        starts = np.flatnonzero(on & ~np.concatenate([[False], on[:-1]]))
-        for a in starts:
-            b = a + int(np.argmin(on[a:])) if not on[a:].all() else len(on)
-            d = points[a:b, k, :2] - points[a, k, :2]
-            travel = max(travel, float(np.max(np.linalg.norm(d, axis=1))))
-            travel_x = max(travel_x, float(np.max(np.abs(d[:, 0]))))
-        if on.any():
-            height = max(height, float(np.max(np.abs(points[on, k, 2]))))
-    free = ~loaded
-    power = 2.0 * np.sum(forces[:, :, 0] * velocity[:, :, 0] + forces[:, :, 1] * velocity[:, :, 2], axis=1)  # both feet
-    dt = np.diff(t)
-    trap = lambda p: float(np.sum(0.5 * (p[1:] + p[:-1]) * dt))  # noqa: E731
-    return {"max_loaded_travel": travel, "max_loaded_travel_x": travel_x, "max_loaded_height": height,
-            "min_unloaded_height": float(np.min(points[:, :, 2][free])) if free.any() else np.inf,
-            "ground_work_positive": trap(np.maximum(power, 0.0)), "ground_work": trap(power)}
 
 
 def _min(x: np.ndarray) -> float:
@@ -210,9 +163,12 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     fs, toe_xz = sr["feet_speed"], sr["toe_xz"]
     out["eq33_feet_distance"] = float(np.sum(0.5 * (fs[1:] + fs[:-1]) * np.diff(t)))
     out["toe_displacement"] = float(toe_xz[-1, 0] - toe_xz[0, 0])
-    if "point_forces" in arrays:
-        out.update(contact_kinematics(t, sr["points"], sr["point_velocity"], np.asarray(arrays["point_forces"]),
-                                      contact, W))
+    out["toe_slip"], out["max_toe_height"] = 0.0, 0.0
+    t_td = float(arrays["touchdown"])
+    for phase in (contact & (t < t_td - 1e-9), contact & (t >= t_td - 1e-9)):
+        if phase.any():
+            out["toe_slip"] = max(out["toe_slip"], float(np.ptp(toe_xz[phase, 0])))
+            out["max_toe_height"] = max(out["max_toe_height"], float(np.max(np.abs(toe_xz[phase, 1]))))
     if "loaded" in arrays:
         out["cop_margin_loaded"] = _min(sr["cop_loaded"])
     if "sigma2" in arrays:

@@ -67,10 +67,8 @@ class Wiring:
     settings: JumpSettings
     selection: Selection
     variables: JumpVariables
-    splines: tuple[BSpline]  # the latent (or joint) path
-    rolls: list[tuple[float, BSpline]]  # the rolling toes' base pitch splines: (start time, spline) per window
+    splines: tuple[BSpline, BSpline, BSpline]  # latent (or joint) path, stance base, landing base
     P_fixed: np.ndarray
-    hinge_standing: float  # the toe joint's standing angle (the anchor switches)
     grid: dict[str, np.ndarray]
     families: list[Family] = field(default_factory=list)
     names: list[str] = field(default_factory=list)
@@ -88,19 +86,19 @@ class Wiring:
         """The path's value and time derivatives (``orders`` of them) at times t."""
         ni.spline([self.splines[0].basis(t, k) for k in range(orders)], self.variables.latent_index(), self.P_fixed)
 
-    def roll(self, ni: NodeInputs, t: np.ndarray) -> None:
-        """The rolling toes' base pitch, rate and acceleration at times t from the spline of the window
-        (ends included) each falls in; zero outside the windows."""
-        index = self.variables.index("roll")
-        n = len(index)
-        bases = [np.zeros((len(t), n)) for _ in range(3)]
-        off = 0
-        for t0, sp_ in self.rolls:
-            inside = (t >= t0 - 1e-9) & (t <= t0 + sp_.duration + 1e-9)
-            for k in range(3):
-                bases[k][inside, off:off + sp_.n_control] = sp_.basis(np.clip(t[inside] - t0, 0, sp_.duration), k)
-            off += sp_.n_control
-        ni.spline(bases, index[:, None], np.zeros((n, 1)))
+    def base(self, ni: NodeInputs, t: np.ndarray, orders: int = 3) -> None:
+        """(b, bd, bdd) of the stance spline at times before touchdown and the landing's after."""
+        _, sps, spl = self.splines
+        touchdown = self.phases.touchdown
+        land = t >= touchdown - 1e-12
+        bases = []
+        for k in range(orders):
+            B = np.zeros((len(t), sps.n_control + spl.n_control))
+            B[~land, :sps.n_control] = sps.basis(np.clip(t[~land], 0, sps.duration), k)
+            B[land, sps.n_control:] = spl.basis(np.clip(t[land] - touchdown, 0, spl.duration), k)
+            bases.append(B)
+        index = np.vstack([self.variables.index("base_stance"), self.variables.index("base_land")])
+        ni.spline(bases, index, np.zeros(index.shape))
 
     def add(self, name: str, ni: NodeInputs, rows: Rows, node_t: np.ndarray, L: sp.spmatrix | None = None) -> None:
         """Family ``name``: ``rows`` of its block at nodes ``ni`` (times ``node_t``), plus ``L w``."""

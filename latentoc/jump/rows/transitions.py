@@ -1,19 +1,12 @@
 """The phase transitions: takeoff (the flight's state from the stance) and touchdown (Eq. 4-5).
 
-Both happen on the toe point: with the toes rolling on it (the base pitch, rate and acceleration
-``roll`` given, ``rolling`` = 1) or flat (``rolling`` = 0).
+Takeoff inputs r: the stance base (b, bd) and the flight variables (c_to, cd_to, L, p); rows:
+the flight variables equal the stance's COM, COM velocity, angular momentum and pitch.
 
-Takeoff inputs r: rolling, roll and the flight variables (c_to, cd_to, L, p); rows: the flight
-variables equal the stance's COM, COM velocity, angular momentum and pitch, and the path's legs
-are closed sideways through the toes (:attr:`~latentoc.jump.robot.JumpRobot.opening` zero, at rest),
-so the closed legs of the contact (:attr:`~latentoc.jump.robot.JumpRobot.closure`) meet the free ones.
-
-Touchdown inputs r: rolling, roll, the landing's toe ground point x_L and sideways shift y_L, the
-flight's pitch p and momentum L,
-its takeoff COM state, the flight time and the impulse's edge weights (0.1 s of body weight).
-Rows: the flight's base pose meets the landing's (the toes arrive flat on their ground point),
-and the perfectly inelastic impact ``M_bb (v+ - v-) = (sum J^T Pi)_base``: the feet stop, the
-joints keep their velocities; the legs closed sideways as at the takeoff.
+Touchdown inputs r: the landing base (b, bd), the flight's pitch p and momentum L, its takeoff
+COM state, the flight time and the impulse's edge weights (0.1 s of body weight). Rows: the
+flight's base pose meets the landing's, and the perfectly inelastic impact
+``M_bb (v+ - v-) = (sum J^T Pi)_base``: the feet stop, the joints keep their velocities.
 """
 from __future__ import annotations
 
@@ -29,33 +22,23 @@ from ..wiring import Rows, Wiring
 from . import inputs
 from .flight import ballistic_com, flight_base
 
-TAKEOFF_INPUTS = {"rolling": 1, "roll": 3, "c_to": 2, "cd_to": 2, "L": 1, "p": 1}
-TOUCHDOWN_INPUTS = {"rolling": 1, "roll": 3, "x_pin": 1, "y_shift": 1, "p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1,
-                    "impulse": EDGES}
-
-
-def _on_toe(robot: JumpRobot, y, yd, ydd, x_pin, u):
-    """(b, bd, bdd) of the base on the toe point: rolling (u["rolling"] = 1) or the toes flat."""
-    roll = robot.rolling(y, yd, ydd, x_pin, u["roll"][0], u["roll"][1], u["roll"][2])
-    flat = robot.anchored("toes")(y, yd, ydd, x_pin)
-    return tuple(u["rolling"] * r + (1 - u["rolling"]) * f for r, f in zip(roll, flat))
+TAKEOFF_INPUTS = {"b": 3, "bd": 3, "c_to": 2, "cd_to": 2, "L": 1, "p": 1}
+TOUCHDOWN_INPUTS = {"b": 3, "bd": 3, "p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1, "impulse": EDGES}
 
 
 def takeoff_block(robot: JumpRobot, d: int) -> RobotBlock:
     (y, yd, ydd, r), u = inputs(robot, TAKEOFF_INPUTS)
-    b, bd, _ = _on_toe(robot, y, yd, ydd, 0, u)
+    b, bd = u["b"], u["bd"]
     c, cd, L = flight_functions(robot.sym, robot.smap)["momentum"](y, yd, b, bd)
     rows = ca.vertcat(c - u["c_to"], cd - u["cd_to"], L - u["L"], b[2] - u["p"])
-    opening = ca.vertcat(*robot.opening(y, yd, 0, 0))
-    return RobotBlock.from_parts("jump_takeoff", (y, yd, ydd, r), {"takeoff": rows, "leg_opening": opening}, d,
-                                 hot=False)
+    return RobotBlock.from_parts("jump_takeoff", (y, yd, ydd, r), {"takeoff": rows}, d, hot=False)
 
 
 def touchdown_block(robot: JumpRobot, d: int) -> RobotBlock:
     (y, yd, ydd, r), u = inputs(robot, TOUCHDOWN_INPUTS)
     W = robot.weight
     bm, bdm, _ = flight_base(robot, y, yd, ydd, u["p"], u["L"], *ballistic_com(u["c_to"], u["cd_to"], u["t"]))
-    bp, bdp, _ = _on_toe(robot, y, yd, ydd, u["x_pin"], u)
+    bp, bdp = u["b"], u["bd"]
     z3 = ca.DM.zeros(3)
     E = ca.DM(robot.E)
     q = ca.vertcat(base_function()(bp, z3, z3)[0], E @ y)
@@ -64,16 +47,8 @@ def touchdown_block(robot: JumpRobot, d: int) -> RobotBlock:
     Mbb = robot.sym.mass_matrix(q)[:6, :6]
     gen = point_generalized_force(robot.sym, robot.geom, q, point_forces(u["impulse"] * W * 0.1, robot.mu))
     impact = Mbb @ (v_plus - v_minus) - gen[:6]
-    opening = ca.vertcat(*robot.opening(y, yd, 0, u["y_shift"]))
     return RobotBlock.from_parts("jump_touchdown", (y, yd, ydd, r),
-                                 {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W,
-                                  "leg_opening": opening}, d, hot=False)
-
-
-def _toe_mode(w: Wiring, ni, t: np.ndarray) -> None:
-    """Whether the toes roll at times t (a takeoff or touchdown inside a rolling window), and the roll."""
-    ni.constant(w.phases.pivot(t).astype(float)[:, None])
-    w.roll(ni, t)
+                                 {"touchdown_position": bm - bp, "impact": impact[SAGITTAL_ROWS] / W}, d, hot=False)
 
 
 def wire_takeoff(w: Wiring) -> None:
@@ -81,12 +56,11 @@ def wire_takeoff(w: Wiring) -> None:
     var, t = w.variables, np.array([w.phases.takeoff])
     ni = w.inputs(1)
     w.latent(ni, t)
-    _toe_mode(w, ni, t)
+    w.base(ni, t, orders=2)
     ni.variables(np.concatenate([var.index("c_to"), var.index("cd_to"), var.index("L_to"),
                                  var.index("pitch_flight")[:1]])[None, :])
     rows = Rows(w.blocks["takeoff"])
     rows.add(0, "takeoff")
-    rows.add(0, "leg_opening")
     w.add("takeoff", ni, rows, t)
 
 
@@ -96,13 +70,12 @@ def wire_touchdown(w: Wiring) -> None:
     t = np.array([ph.touchdown])
     ni = w.inputs(1)
     w.latent(ni, t)
-    _toe_mode(w, ni, t)
-    ni.variables(np.concatenate([var.index("x_L"), var.index("y_L"), var.index("pitch_flight")[-1:], var.index("L_to"), var.index("c_to"),
+    w.base(ni, t, orders=2)
+    ni.variables(np.concatenate([var.index("pitch_flight")[-1:], var.index("L_to"), var.index("c_to"),
                                  var.index("cd_to")])[None, :])
     ni.constant(np.array([[ph.touchdown - ph.takeoff]]))
     ni.variables(var.index("lam_impact")[None, :])
     rows = Rows(w.blocks["touchdown"])
     rows.add(0, "touchdown_position")
     rows.add(0, "impact")
-    rows.add(0, "leg_opening")
     w.add("touchdown", ni, rows, t)
