@@ -60,7 +60,8 @@ def test_converges_and_reports_it():
     r = model.learning
     assert r.converged and r.iterations > 0 and r.evaluations > r.iterations and "Newton decrement" in r.message
     f, g, grad, z = model_objective(model)
-    assert np.max(np.abs(g)) == pytest.approx(r.gradient_norm, rel=1e-6)
+    # both are roundoff of L at the minimum (~1e-10 here), so they agree to roundoff, not to digits
+    assert np.max(np.abs(g)) == pytest.approx(r.gradient_norm, abs=1e-12 * abs(f))
     assert decrement(central_hessian(grad, z), g) <= 10 * settings.ftol * abs(f)
     assert model.learning_summary() == {
         "gpdm_objective": model.objective_value, "gpdm_iterations": r.iterations, "gpdm_evaluations": r.evaluations,
@@ -78,7 +79,7 @@ def test_the_arms_minimum_is_the_previous_learners():
     problem = load_problem("arm-raise")
     ref = np.load(Path(__file__).with_name("gpdm_previous_minimum_arm.npz"))
     Q = training_frames(problem)[1]
-    np.testing.assert_array_equal(Q, ref["Y"])
+    np.testing.assert_allclose(Q, ref["Y"], rtol=0, atol=1e-12)  # to roundoff across library versions
     model = learn_gpdm(Q, gpdm_settings(problem))
     assert model.learning.converged
     assert abs(model.objective_value - ref["f"]) <= 1e-8 * abs(ref["f"])
