@@ -88,7 +88,7 @@ def _jump_arrays(stride: int) -> tuple[pin.Model, dict[str, np.ndarray]]:
               "contact": contact.astype(np.int8), "loaded": loaded.astype(np.int8),
               "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
               "contact_points": np.array(POINTS), "heel_offset": geom.heel_offset, "pad_offset": geom.pad_offset,
-              "toe_offset": geom.toe_offset, "takeoff": np.float64(takeoff), "touchdown": np.float64(touchdown),
+              "takeoff": np.float64(takeoff), "touchdown": np.float64(touchdown),
               "settle": np.float64(touchdown + 0.07), "tau_min": np.full(model.nv - 6, -300.0),
               "tau_max": np.full(model.nv - 6, 300.0), "friction": np.float64(MU), "q_initial": Q0,
               "model": np.str_(model.saveToString())}

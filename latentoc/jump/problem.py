@@ -28,6 +28,7 @@ from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, resolve_tube
+from .base import base_to_freeflyer
 from .contact import POINTS, FootGeometry, foot_points
 from .path import METHODS, joint_range_path, latent_path
 from .phases import Phases, training_phases
@@ -284,6 +285,15 @@ def _violations(r: dict[str, Any], checks: dict[str, float], mu: float) -> dict[
             "dynamics_bw": checks["max_dynamics_residual"]}
 
 
+def _training_on(js: JumpSetup, t: np.ndarray) -> np.ndarray:
+    """The training jump's configurations at times t (linear in its coordinates): the initial motion
+    a view and the plots show beside the optimised one."""
+    tr = js.training
+    Z = np.column_stack([tr.base, tr.Y])
+    Zt = np.column_stack([np.interp(t, tr.t, Z[:, j]) for j in range(Z.shape[1])])
+    return js.smap.to_full(Zt[:, 3:], base_to_freeflyer(Zt[:, :3])[0])
+
+
 def _joint_range(problem: Problem, method: str, joint_range_deg: float | None) -> float | None:
     """The joint range (deg) of ``method`` (None for the latent path); a SolveError for an unknown
     method or a bad range, before any work."""
@@ -349,6 +359,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     r.pop("settings", None)  # solve_jump's copy of the JumpSettings: jump_settings above
     r.update(checks)
     r["violations"] = _violations(r, checks, s.mu)
+    traj["q_initial"] = _training_on(js, traj["t"])
     traj["P"] = traj.pop("control_points")  # the result schema's names
     if "latent" in traj:
         traj["x"] = traj.pop("latent")
