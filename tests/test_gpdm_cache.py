@@ -56,6 +56,27 @@ def test_a_damaged_file_is_learned_again(tmp_path, monkeypatch):
     assert model.learning.converged and cached_gpdm(Y, settings).objective_value == model.objective_value
 
 
+def test_an_entry_without_its_checksum_is_learned_again(tmp_path, monkeypatch, capsys):
+    """A cached model whose checksum file is gone is never adopted, even when its data and settings
+    match its name (its learned variables can be anything): it is learned again, with a warning."""
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    Y, settings = synthetic_motion(30, 5, seed=3, noise=0.05), GPDMSettings(latent_dim=2)
+    good = cached_gpdm(Y, settings)
+    path = model_path(Y, settings)
+    tampered = learn_gpdm(Y, settings)
+    tampered.X, tampered.alpha = 1.5 * tampered.X, 50 * tampered.alpha
+    tampered.save(path)
+    path.with_name(path.name + ".sha256").unlink()
+    capsys.readouterr()
+    model = cached_gpdm(Y, settings)
+    assert "no checksum" in capsys.readouterr().err
+    np.testing.assert_array_equal(model.X, good.X)
+    np.testing.assert_array_equal(model.alpha, good.alpha)
+    # the entry is replaced with the learned model and its checksum: read back without a warning
+    np.testing.assert_array_equal(cached_gpdm(Y, settings).X, good.X)
+    assert capsys.readouterr().err == ""
+
+
 def test_shipped_models_are_converged_minima_of_their_data():
     """Each model in latentoc/models/ is named by its data and settings, and is a converged minimum
     of Eq. 16 for them: the Newton decrement, from a central-difference Hessian of the exact gradient,

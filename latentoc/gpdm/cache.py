@@ -9,7 +9,8 @@ models of its larger problems (the broad jump's: 5 s to learn) under the same na
 A cached model is written under a temporary name and renamed, with its SHA-256 in
 ``gpdm_<key>.npz.sha256`` beside it; before it is loaded the checksum is verified and the model
 must be the one its name stands for (its data and settings hash to the name). A damaged,
-truncated, empty or foreign file is learned again and replaced, with a one-line warning.
+truncated, empty or foreign file, or one without its checksum, is learned again and replaced, with
+a one-line warning.
 """
 
 from __future__ import annotations
@@ -67,7 +68,9 @@ def _read(path: Path, checked: bool) -> GPDM:
             recorded = _checksum_path(path).read_text().strip()
         except (OSError, UnicodeDecodeError):
             recorded = None
-        if recorded is not None and recorded != sha256(data):
+        if recorded is None:  # never adopted: its content cannot be told from a tampered one
+            raise ValueError(f"no checksum is recorded beside it ({_checksum_path(path).name})")
+        if recorded != sha256(data):
             raise ValueError("its checksum differs from the one recorded beside it")
     try:
         model = GPDM.load(path)
@@ -110,11 +113,6 @@ def cached_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings) ->
         except (OSError, ValueError) as exc:
             _warn(f"the cached GPDM {known} is damaged or foreign ({exc}); learning it again")
             continue
-        if checked and not _checksum_path(known).exists():
-            try:  # a model cached before checksums were recorded, verified above: its checksum now
-                _store(model, known)
-            except OSError:
-                pass
         return model
     model = learn_gpdm(Y, settings)
     try:
