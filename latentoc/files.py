@@ -3,7 +3,9 @@
 * :func:`atomic_write`: a file is written under a temporary name beside it, then renamed.
 * :func:`write_folder`: a result folder is written into a temporary folder beside the target
   and renamed into place; into an existing folder, its ``marker`` file (``result.json``) is
-  removed first and written last, so at no moment does a folder claim a mixture of two writes.
+  removed first and written last, so at no moment does a folder claim a mixture of two writes;
+  writers into the same parent folder take turns (an exclusive lock on the parent), so two
+  processes saving into one folder leave one whole write, the last.
 * :func:`check_out_dir`: ``--out`` must be a folder (or not exist yet) that can be written,
   checked before any work.
 * :func:`dumps_json`: strict JSON (no ``NaN``/``Infinity`` tokens): a non-finite float is the
@@ -11,6 +13,7 @@
 """
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
 import math
@@ -18,7 +21,8 @@ import os
 import shutil
 import tempfile
 import zipfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -70,20 +74,41 @@ def sha256(data: bytes) -> str:
 
 def check_out_dir(path: str | Path, what: str = "--out") -> Path:
     """``path`` as an output folder: an OutputError unless it is a folder, or does not exist and its
-    nearest existing parent is a folder, that this process can write (checked before any work)."""
+    nearest existing parent is a folder, that this process can write (checked before any work: a
+    dangling link, a name longer than the file system takes, a folder it refuses to write in)."""
     out = Path(path)
+    if out.is_symlink() and not out.exists():
+        raise OutputError(f"{what} {out} is a symbolic link to {os.readlink(out)}, which does not exist")
     if out.exists() and not out.is_dir():
         raise OutputError(f"{what} {out} is a file, not a folder")
     probe = out
     while not probe.exists():
+        if probe.is_symlink():
+            raise OutputError(f"{what} {out}: {probe} is a symbolic link to {os.readlink(probe)}, which does not exist")
         if probe.parent == probe:
             break
         probe = probe.parent
     if not probe.is_dir():
         raise OutputError(f"{what} {out}: {probe} is a file, not a folder")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise OutputError(f"{what} {out}: the folder {probe} is not writable")
+    try:
+        longest = os.pathconf(probe, "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):
+        longest = 255
+    made = [p for p in (out, *out.parents) if not p.exists()]  # out and the parents to create
+    too_long = [p for p in made if len(os.fsencode(p.name)) + (_TMP_EXTRA if p == out else 0) > longest]
+    if too_long:
+        raise OutputError(f"{what} {str(out)[:200]}: the name {too_long[0].name[:60]!r}... is "
+                          f"{len(os.fsencode(too_long[0].name))} bytes; this file system takes "
+                          f"{longest - _TMP_EXTRA} here")
+    try:  # os.access says yes to root everywhere, also where nothing can be made (/proc)
+        os.rmdir(tempfile.mkdtemp(prefix=".latentoc-probe.", dir=probe))
+    except OSError as exc:
+        raise OutputError(f"{what} {out}: the folder {probe} is not writable ({exc.strerror})") from None
     return out
+
+
+#: the bytes a temporary folder's name adds to the output folder's (".NAME.PID.XXXXXXXX.tmp")
+_TMP_EXTRA = 24
 
 
 def write_folder(files: Mapping[str, bytes], out_dir: str | Path, marker: str, owned: tuple[str, ...] = ()
@@ -94,7 +119,7 @@ def write_folder(files: Mapping[str, bytes], out_dir: str | Path, marker: str, o
     out = check_out_dir(out_dir, "output folder")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}.", suffix=".tmp", dir=out.parent))
     except OSError as exc:
         raise OutputError(f"cannot write {out}: {exc}") from None
     names = sorted(files, key=lambda n: n == marker)  # the marker last
@@ -102,18 +127,51 @@ def write_folder(files: Mapping[str, bytes], out_dir: str | Path, marker: str, o
         for name in names:
             _write_bytes(tmp / name, files[name])
         os.chmod(tmp, 0o777 & ~_UMASK)
-        try:
-            os.rename(tmp, out)  # the target did not exist: the whole folder at once
-        except OSError:
-            if not out.is_dir():
-                raise
-            _replace_into(tmp, out, names, marker, owned)
+        with _writers_take_turns(out.parent):
+            _remove_abandoned(out)
+            try:
+                os.rename(tmp, out)  # the target did not exist: the whole folder at once
+            except OSError:
+                if not out.is_dir():
+                    raise
+                _replace_into(tmp, out, names, marker, owned)
     except OSError as exc:
         raise OutputError(f"cannot write {out}: {exc}") from None
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
     return [out / n for n in files]
+
+
+def _remove_abandoned(out: Path) -> None:
+    """Remove the temporary folders of ``out`` whose writer is gone (killed while writing)."""
+    for tmp in out.parent.glob(f".{glob.escape(out.name)}.*.tmp"):
+        pid = tmp.name[len(out.name) + 2:].split(".", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            shutil.rmtree(tmp, ignore_errors=True)
+        except OSError:  # alive, another user's
+            pass
+
+
+@contextmanager
+def _writers_take_turns(parent: Path) -> Iterator[None]:
+    """An exclusive advisory lock on the folder ``parent`` (POSIX flock; released on exit, also when
+    the process dies); without fcntl (Windows) no lock."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover
+        yield
+        return
+    fd = os.open(parent, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
 
 
 def _replace_into(tmp: Path, out: Path, names: list[str], marker: str, owned: tuple[str, ...]) -> None:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, fields
@@ -25,9 +26,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from .environment import Environment
 from .errors import ResultFileError
+from .arguments import expect
 from .files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
 from .gpdm import GPDM
 from .kind import Solution
@@ -214,8 +217,36 @@ class Result:
         missing = [k for k in _REQUIRED_ARRAYS if k not in trajectory]
         if missing:
             raise ResultFileError(f"{where}: {TRAJECTORY_NAME} lacks {missing}")
+        problem = _array_problem(trajectory)
+        if problem is not None:
+            raise ResultFileError(f"{where}: {TRAJECTORY_NAME}: {problem}")
         core = _typed(data, where)
         return cls(**core, trajectory=trajectory, gpdm=gpdm)
+
+
+def _array_problem(traj: Mapping[str, np.ndarray]) -> str | None:
+    """What is wrong with a trajectory's core arrays, or None: ``model`` a Pinocchio model string, ``t``
+    finite and increasing, ``q`` (len(t) x nq), ``v``, ``a``, ``tau`` one row per time, all finite."""
+    model = traj["model"]
+    if model.ndim != 0 or model.dtype.kind != "U":
+        return f"'model' must be one string (Pinocchio's saveToString), got {model.dtype} of shape {model.shape}"
+    try:
+        nq = pin.Model()
+        nq.loadFromString(str(model))
+    except (RuntimeError, ValueError) as exc:
+        return f"'model' is not a Pinocchio model string ({exc})"
+    t = traj["t"]
+    if t.ndim != 1 or len(t) < 1 or t.dtype.kind not in "fi" or not np.isfinite(t).all() or (np.diff(t) <= 0).any():
+        return "'t' must be finite, increasing times (one row per sample)"
+    shapes = {"q": nq.nq, "v": nq.nv, "a": nq.nv}
+    for key in ("q", "v", "a", "tau"):
+        a = traj[key]
+        if a.ndim != 2 or len(a) != len(t) or (key in shapes and a.shape[1] != shapes[key]):
+            want = f"({len(t)}, {shapes[key]})" if key in shapes else f"({len(t)}, n)"
+            return f"'{key}' has shape {a.shape}, the model and t need {want}"
+        if a.dtype.kind not in "fi" or not np.isfinite(a).all():
+            return f"'{key}' has values that are not finite numbers"
+    return None
 
 
 def _no_constant(name: str) -> Any:
@@ -309,6 +340,7 @@ def _typed(data: dict[str, Any], where: str) -> dict[str, Any]:
 
 def load_result(out_dir: str | Path) -> Result:
     """Read a folder written by :meth:`Result.save` (a :class:`ResultFileError` if it cannot)."""
+    expect("load_result", "out_dir", out_dir, (str, os.PathLike), "a result folder's path")
     out = Path(out_dir)
     if not (out / RESULT_NAME).is_file():
         raise ResultFileError(f"{out}: no {RESULT_NAME} (not a result folder, or a solve that did not finish)")

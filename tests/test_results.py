@@ -2,6 +2,7 @@
 
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -234,3 +235,92 @@ def test_out_must_be_a_writable_folder(tmp_path):
     finally:
         ro.chmod(0o700)
     assert check_out_dir(tmp_path / "a" / "b") == tmp_path / "a" / "b"
+
+
+def _save(out, writer: int, pause: float) -> None:
+    """Save a folder whose every file names the writer, pausing ``pause`` s before its marker."""
+    import time
+
+    from latentoc.files import write_folder
+
+    replace = os.replace
+
+    def slow_marker(a, b):
+        if os.path.basename(b) == "result.json" and os.path.dirname(b) == str(out):  # the move into out
+            time.sleep(pause)
+        replace(a, b)
+
+    os.replace = slow_marker  # this forked writer's only
+    files = {name: bytes([writer]) * 1000 for name in ("gpdm.npz", "trajectory.npz", "result.json")}
+    write_folder(files, out, "result.json", owned=("gpdm.npz", "trajectory.npz"))
+
+
+def test_concurrent_writers_never_mix_a_folder(tmp_path):
+    """Two processes saving into one result folder take turns: the first pauses between its arrays and
+    its result.json while the second saves whole; the folder then holds one writer's files (without
+    the lock: the second's arrays beside the first's result.json, as issue 36 saw 1 trial in 40)."""
+    import multiprocessing
+    import time
+
+    ctx = multiprocessing.get_context("fork")
+    out = tmp_path / "r"
+    _save(out, 9, 0.0)  # the folder exists: the writers move their files into it
+    first = ctx.Process(target=_save, args=(out, 1, 1.0))
+    second = ctx.Process(target=_save, args=(out, 2, 0.0))
+    first.start()
+    time.sleep(0.4)
+    second.start()
+    for p in (first, second):
+        p.join()
+    assert first.exitcode == second.exitcode == 0
+    held = {f.name: f.read_bytes()[:1] for f in out.iterdir()}
+    assert sorted(held) == ["gpdm.npz", "result.json", "trajectory.npz"] and len(set(held.values())) == 1, held
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"model": np.str_("not a model")}, "'model' is not a Pinocchio model string"),
+    ({"model": np.zeros(3)}, "'model' must be one string"),
+    ({"q": np.zeros((11, 3))}, r"'q' has shape \(11, 3\), the model and t need \(11, 7\)"),
+    ({"q": np.zeros((10, 7))}, r"'q' has shape \(10, 7\)"),
+    ({"v": np.full((11, 7), np.nan)}, "'v' has values that are not finite"),
+    ({"t": np.r_[0.0, np.ones(10)]}, "'t' must be finite, increasing"),
+])
+def test_arrays_that_match_their_checksums_but_not_the_model_are_named(tmp_path, change, match):
+    """Files written whole (their checksums hold) whose arrays cannot be the model's motion: the load
+    names the file and the array instead of a traceback later or a silent drawing."""
+    make_result(trajectory=change).save(tmp_path / "r")
+    with pytest.raises(ResultFileError, match=f"r: trajectory.npz: {match}"):
+        load_result(tmp_path / "r")
+
+
+def test_out_is_checked_before_any_work(tmp_path):
+    """--out: a dangling link, a name the file system cannot take, a folder nothing can be made in
+    are refused up front, naming the path (issue 36: they failed after the solve)."""
+    from latentoc.files import OutputError, check_out_dir
+
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    for bad, match in [(tmp_path / "dangling", "is a symbolic link to .*nowhere, which does not exist"),
+                       (tmp_path / "dangling" / "r", "is a symbolic link"),
+                       (tmp_path / ("n" * 250), "bytes; this file system takes"),
+                       (Path("/proc/latentoc-result"), "/proc is not writable")]:
+        with pytest.raises(OutputError, match=match):
+            check_out_dir(bad)
+    assert check_out_dir(tmp_path / "a" / "b") == tmp_path / "a" / "b" and not (tmp_path / "a").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dangling"]  # the probe left nothing
+
+
+def test_a_killed_writers_temporary_folder_is_removed_by_the_next_save(tmp_path):
+    import subprocess
+    import sys
+
+    from latentoc.files import write_folder
+
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    left = tmp_path / f".r.{int(gone.stdout)}.abcd1234.tmp"  # what a SIGTERM while writing leaves
+    left.mkdir()
+    (left / "trajectory.npz").write_bytes(b"half")
+    alive = tmp_path / f".r.{os.getppid()}.efgh5678.tmp"  # a writer still running: left alone
+    alive.mkdir()
+    write_folder({"result.json": b"{}"}, tmp_path / "r", "result.json")
+    assert not left.exists() and alive.exists() and (tmp_path / "r" / "result.json").read_bytes() == b"{}"
