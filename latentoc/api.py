@@ -1,6 +1,7 @@
 """The public solve: a problem in, a :class:`~latentoc.results.Result` out (``latentoc.solve``)."""
 from __future__ import annotations
 
+from .arguments import expect
 from .gpdm import GPDM
 from .interrupts import watching
 from .kind import Solution
@@ -21,6 +22,15 @@ def solve(problem: Problem, *, method: str = "latent", joint_range_deg: float | 
     smaller tube, whose optimum the solve starts from. ``verbose``: Ipopt's own log.
     Input that cannot be solved raises :class:`~latentoc.errors.SolveError` before any work;
     Ctrl-C raises KeyboardInterrupt, also when the solver swallowed it (:mod:`latentoc.interrupts`)."""
+    expect("solve", "problem", problem, Problem, "a Problem (latentoc.load_problem(NAME or PATH))")
+    expect("solve", "method", method, str, "'latent' or 'joint-range'")
+    if joint_range_deg is not None:
+        expect("solve", "joint_range_deg", joint_range_deg, (int, float), "a number of degrees or None")
+    if gpdm is not None:
+        expect("solve", "gpdm", gpdm, GPDM, "a learned GPDM or None")
+    if warm_start is not None:
+        expect("solve", "warm_start", warm_start, (Result, Solution), "the Result of the same problem or None")
+    problem = problem.validate()  # settings changed in place since loading are checked again
     kind = kind_of(problem.kind)
     with watching():
         solution = kind.solve(problem, method=method, joint_range_deg=joint_range_deg, gpdm=gpdm, verbose=verbose,

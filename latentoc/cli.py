@@ -27,6 +27,17 @@ from .simulate import command as simulate
 __all__ = ["main"]
 
 
+def _positive(text: str) -> float:
+    """An argparse type: a positive, finite number (rates, gains, ranges, budgets)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a number") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text[:40]!r}: must be a positive, finite number")
+    return value
+
+
 def _solve_arguments(sub: Any) -> None:
     """The ``solve`` command's arguments."""
     s = sub.add_parser("solve", help="solve a problem and write result.json, trajectory.npz, gpdm.npz")
@@ -37,7 +48,7 @@ def _solve_arguments(sub: Any) -> None:
     s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
     s.add_argument("--method", choices=list(dict.fromkeys(m for k in KINDS.values() for m in k.methods)),
                    default="latent", help="a method of the problem's kind (latentoc.kinds)")
-    s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
+    s.add_argument("--joint-range", type=_positive, default=None, help="baseline joint range, +-deg")
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>-<method>)")
     s.add_argument("--quiet", action="store_true", help="no progress display")
     s.add_argument("--verbose", action="store_true", help="Ipopt's own iteration log")
@@ -57,11 +68,11 @@ def _learn_arguments(sub: Any) -> None:
     ln.add_argument("--plots", action="store_true", help="also write latent_tube.png, reconstruction.png, variance.png")
     ln.add_argument("--stride", type=int, default=1, help="learn on every k-th frame (the last one always kept)")
     ln.add_argument("--clip", action="store_true", help="clip a motion that leaves the joint limits to them")
-    ln.add_argument("--rate", type=float, default=None, help="resample to this rate, Hz (default: the file's median)")
+    ln.add_argument("--rate", type=_positive, default=None, help="resample to this rate, Hz (default: the file's median)")
     ln.add_argument("--asf", type=Path, default=None, help="the ASF skeleton of an .amc motion")
     ln.add_argument("--start", type=int, default=None, help="first frame (0-based)")
     ln.add_argument("--stop", type=int, default=None, help="one past the last frame")
-    ln.add_argument("--fps", type=float, default=120.0, help="frame rate of an .amc motion (default 120)")
+    ln.add_argument("--fps", type=_positive, default=120.0, help="frame rate of an .amc motion (default 120)")
 
 
 def _plot_arguments(sub: Any) -> None:
@@ -78,7 +89,7 @@ def _view_arguments(sub: Any) -> None:
     vw = sub.add_parser("view", help="the 3-D view of a result: one self-contained HTML page with the animation")
     vw.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz)")
     vw.add_argument("--html", type=Path, default=None, help="the page to write (default: RESULT/view.html)")
-    vw.add_argument("--rate", type=float, default=50.0, help="animation frames per second of motion time (default 50)")
+    vw.add_argument("--rate", type=_positive, default=50.0, help="animation frames per second of motion time (default 50)")
 
 
 def _notebooks_arguments(sub: Any) -> None:
@@ -103,7 +114,7 @@ def _sweep_arguments(sub: Any) -> None:
     w.add_argument("problem")
     w.add_argument("--tubes", nargs="*", default=None, help="tubes (numbers or <k>x); default: the problem's")
     w.add_argument("--baseline", choices=["joint-range"], default=None)
-    w.add_argument("--ranges", nargs="*", type=float, default=None, help="joint ranges, deg")
+    w.add_argument("--ranges", nargs="*", type=_positive, default=None, help="joint ranges, deg")
     w.add_argument("--latent-dim", type=int, default=None)
     w.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
     w.add_argument("--out", type=Path, default=None, help="folder of the sweep: OUT/<task>/ per solve, sweep.json")
@@ -130,7 +141,7 @@ def _reproduce_arguments(sub: Any) -> None:
     r.add_argument("--quick", action="store_true", help="the arm's tables and Fig. 5 only (no OMPL, no jump)")
     r.add_argument("--figures", action="store_true",
                    help="instead of the tables: the README's figures in docs/images (latentoc/readme_figures.py)")
-    r.add_argument("--budgets", nargs="*", type=float, default=[10.0, 60.0, 300.0],
+    r.add_argument("--budgets", nargs="*", type=_positive, default=[10.0, 60.0, 300.0],
                    help="the sampling baseline's cumulative wall budgets, s")
     r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md")
     r.add_argument("--quiet", action="store_true", help="no progress display")

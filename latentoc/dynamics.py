@@ -19,12 +19,14 @@ import casadi
 import numpy as np
 import pinocchio
 
+from .errors import LatentocError
+
 __all__ = ["SymbolicModel", "available_backends", "DynamicsInputError"]
 
 BACKENDS = ("pinocchio.casadi", "bridge")
 
 
-class DynamicsInputError(ValueError):
+class DynamicsInputError(LatentocError, ValueError):
     """A model, frame name or argument the symbolic dynamics cannot take."""
 
 

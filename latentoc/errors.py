@@ -21,7 +21,8 @@ from :class:`LookupError`), so ``except ValueError`` around a call keeps working
 """
 from __future__ import annotations
 
-__all__ = ["LatentocError", "ProblemError", "SolveError", "ResultFileError", "SweepError", "SimulationError"]
+__all__ = ["LatentocError", "ProblemError", "SolveError", "ResultFileError", "SweepError", "SimulationError",
+           "ArgumentError"]
 
 
 class LatentocError(Exception):
@@ -46,3 +47,8 @@ class SweepError(LatentocError):
 
 class SimulationError(LatentocError, ValueError):
     """A physics replay that cannot run: its gains or settings, or a model or result it cannot take."""
+
+
+class ArgumentError(LatentocError, ValueError):
+    """An argument of a public function or a command of the wrong type or outside its range (the
+    argument and what it must be in the message)."""

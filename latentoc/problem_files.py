@@ -16,11 +16,13 @@ the file and key.
 
 from __future__ import annotations
 
+import difflib
 import tomllib
 from pathlib import Path
 from typing import Any
 
 from .errors import ProblemError
+from .toml_limits import MAX_BYTES, toml_bounds_problem
 from .kinds import KINDS, kind_of
 from .paths import data_dir
 from .problem import Problem, check_name, checked
@@ -42,20 +44,41 @@ def problem_names() -> list[str]:
 
 def _resolve(name_or_path: str | Path) -> Path:
     text = str(name_or_path)
+    shown = text if len(text) <= 200 else f"{text[:200]}... ({len(text)} characters)"
     path = Path(text)
-    if text.endswith(".toml") or path.is_file() or "/" in text:
-        if not path.is_file():
-            raise ProblemError(f"problem file {text} does not exist")
-        return path
+    try:
+        if text.endswith(".toml") or path.is_file() or "/" in text:
+            if path.is_dir():
+                raise ProblemError(f"problem file {shown} is a folder, not a .toml file")
+            if path.exists() and not path.is_file():
+                raise ProblemError(f"problem file {shown} is not a regular file (a pipe or device?)")
+            if not path.is_file():
+                raise ProblemError(f"problem file {shown} does not exist")
+            return path
+    except OSError as exc:
+        raise ProblemError(f"problem file {shown} cannot be read: {exc.strerror}") from None
     candidate = problems_dir() / f"{text}.toml"
     if not candidate.is_file():
-        raise ProblemError(f"unknown problem {text!r}; known problems: {', '.join(problem_names())}")
+        names = problem_names()
+        close = difflib.get_close_matches(text, names, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ProblemError(f"unknown problem {shown!r}; {hint}known problems: {', '.join(names)}, "
+                           "or the path of a .toml file")
     return candidate
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        if not path.is_file():
+            raise ProblemError(f"{path}: not a regular file (a problem file is a .toml file)")
+        if path.stat().st_size > MAX_BYTES:
+            raise ProblemError(f"{path}: {path.stat().st_size} bytes; a problem file needs a few kB")
+        text = path.read_text(encoding="utf-8")
+        if text.startswith("\ufeff"):
+            raise ProblemError(f"{path}: starts with a byte-order mark, which TOML does not allow; save it as UTF-8 without BOM")
+        if (problem := toml_bounds_problem(text)) is not None:
+            raise ProblemError(f"{path}: {problem}")
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ProblemError(f"{path}: not valid TOML: {exc}") from None
     except UnicodeDecodeError as exc:

@@ -34,7 +34,8 @@ from pathlib import Path
 from typing import Any
 
 from .api import solve
-from .errors import LatentocError, SweepError
+from .arguments import expect
+from .errors import ArgumentError, LatentocError, SweepError
 from .kinds import kind_of
 from .problem import Problem
 from .problem_files import problem_from_dict
@@ -123,6 +124,13 @@ def sweep(problem: Problem, tubes: Sequence[float | str] | None = None, executor
           warm_start: bool = True, progress: Callable[[str], None] | None = print) -> SweepResult:
     """Solve ``problem`` at each tube (default: its ``sweep_tubes``) and each baseline joint range
     (module doc): serially, or on ``executor`` (a Dask Client or a concurrent.futures Executor)."""
+    expect("sweep", "problem", problem, Problem, "a Problem (latentoc.load_problem(NAME or PATH))")
+    if tubes is not None:
+        expect("sweep", "tubes", tubes, (list, tuple), 'a list of tubes (["2x", "5x"] or numbers), not one tube')
+    expect("sweep", "baseline_ranges", baseline_ranges, (list, tuple), "a list of joint ranges, degrees")
+    if executor is not None and not (hasattr(executor, "submit") and callable(executor.submit)):
+        raise ArgumentError(f"sweep(): argument 'executor' must be a dask.distributed Client, a "
+                            f"concurrent.futures Executor or None, got {type(executor).__name__}")
     tasks = sweep_tasks(problem, problem.sweep_tubes if tubes is None else tubes, baseline_ranges)
     if resume and out is None:
         raise SweepError("resume needs the output folder the earlier run wrote")

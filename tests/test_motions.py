@@ -143,8 +143,8 @@ BAD_CSV = [
                                     r"limit 3.14159 at t = 1 s \(line 3\).*clip_to_limits = true"),
     ("t,shoulder_pan_joint\n0,1\n", "1 samples; a motion needs at least 2"),
     ("\ufefft,shoulder_pan_joint\n0,1e999\n1,0\n", r"line 2, column 'shoulder_pan_joint': Inf"),
-    ("t,shoulder_pan_joint\n0,0\n1e-9,0\n2e-9,0\n1.1,0\n", "would give more than 1000000 samples"),
-    ("t,shoulder_pan_joint\n0,0\n1e300,0\n2e300,0\n3.1e300,0\n", "cannot be resampled"),
+    ("t,shoulder_pan_joint\n0,0\n1e-9,0\n2e-9,0\n1.1,0\n", r"1e\+09 Hz \(median step\).*times look like another unit than seconds"),
+    ("t,shoulder_pan_joint\n0,0\n1e300,0\n2e300,0\n3.1e300,0\n", "times look like another unit than seconds"),
 ]
 
 
@@ -213,3 +213,15 @@ def test_fuzzed_csv_raises_only_latentoc_errors(tmp_path, ur5, text, raw):
             demonstration_from_file(f, ur5, clip_to_limits=True)
         except LatentocError as exc:
             assert str(f) in str(exc)
+
+
+@pytest.mark.parametrize("scale, unit", [(1000.0, "milliseconds"), (1e300, "another unit than seconds"),
+                                         (1e-300, "another unit than seconds")])
+def test_times_in_another_unit_are_refused_with_the_likely_cause(tmp_path, ur5, scale, unit):
+    """t x 1000 (milliseconds) makes a 2 s motion last 2000 s and its grids millions of samples: a
+    demonstration longer than 10 min or sampled above 100 kHz is refused naming the unit it looks like."""
+    t, Q = motion()
+    path = write_csv(tmp_path / "ms.csv", UR5_JOINTS, t * scale, Q)
+    with pytest.raises(MotionFileError, match=f"ms.csv: .* s at .* Hz \\(median step\\).* times look like {unit}"):
+        demonstration_from_file(path, ur5)
+    assert demonstration_from_file(write_csv(tmp_path / "s.csv", UR5_JOINTS, t, Q), ur5).duration == pytest.approx(t[-1] - t[0])

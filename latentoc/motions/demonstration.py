@@ -36,6 +36,8 @@ from .readers import FORMATS, MotionFileError, RawMotion, read_raw_motion
 __all__ = ["Demonstration", "TRAINING", "TRAINING_MOTIONS", "demonstration_from_file", "load_demonstration",
            "one_dof_joints", "check_frames", "MotionFileError"]
 
+#: the longest demonstration and the fastest sampling read; beyond them the times are not in seconds
+MAX_DURATION_S, MAX_RATE_HZ = 600.0, 100_000.0
 UNIFORM_RTOL = 1e-6  # time steps within this fraction of the median step count as uniform
 MAX_SAMPLES = 1_000_000  # a resampled motion may have at most this many samples
 
@@ -178,11 +180,16 @@ def _uniform_time(raw: RawMotion, rate: float | None) -> tuple[np.ndarray, np.nd
         raise MotionFileError(f"{raw.path}, {raw.where[i]}: time t = {t[i]:.6g} s does not increase "
                               f"(previous sample t = {t[i - 1]:.6g} s); t must be strictly increasing")
     step = float(np.median(dt))
+    span = float(t[-1] - t[0])
+    if 1.0 / step > MAX_RATE_HZ or span > MAX_DURATION_S:
+        unit = "milliseconds" if 1.0 / step <= MAX_RATE_HZ and span / 1000.0 <= MAX_DURATION_S else "another unit than seconds"
+        raise MotionFileError(f"{raw.path}: {span:.6g} s at {1.0 / step:.6g} Hz (median step); a demonstration lasts at "
+                              f"most {MAX_DURATION_S:g} s at up to {MAX_RATE_HZ / 1000:g} kHz, so the times look like "
+                              f"{unit}: give t in seconds")
     uniform = bool(np.all(np.abs(dt - step) <= UNIFORM_RTOL * step))
     if uniform and (rate is None or abs(rate * step - 1.0) <= UNIFORM_RTOL):
         return t - t[0], raw.values, 1.0 / step, False
     target = 1.0 / step if rate is None else float(rate)
-    span = float(t[-1] - t[0])
     if not span * target <= MAX_SAMPLES:
         raise MotionFileError(f"{raw.path}: resampling {span:.6g} s at {target:.6g} Hz would give more than "
                               f"{MAX_SAMPLES} samples; give a lower rate")

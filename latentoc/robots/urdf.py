@@ -16,6 +16,7 @@ import pinocchio
 
 from ..errors import LatentocError
 from .robot_checks import check_urdf
+from .urdf_tree import check_tree
 
 __all__ = ["RobotFileError", "load_urdf", "continuous_as_revolute"]
 
@@ -51,6 +52,10 @@ def load_urdf(path: str | Path, free_flyer: bool = False,
         raise RobotFileError(f"URDF {urdf} cannot be read: {exc}") from None
     if root.tag != "robot":
         raise RobotFileError(f"URDF {urdf}: the root element is <{root.tag}>, a URDF's is <robot>")
+    try:  # the tree Pinocchio's parser can take, then the names of what it would get wrong
+        check_tree(root)
+    except ValueError as exc:
+        raise RobotFileError(f"URDF {urdf}: {exc}") from None
     try:  # masses, inertias and limits that pinocchio would take as they are (module robot_checks)
         check_urdf(root, urdf)
     except ValueError as exc:
@@ -64,6 +69,9 @@ def load_urdf(path: str | Path, free_flyer: bool = False,
         raise RobotFileError(f"URDF {urdf} does not parse: {exc}") from None
     if model.nv == 0:
         raise RobotFileError(f"URDF {urdf} has no movable joint")
+    if not sum(model.inertias[j].mass for j in range(1, model.njoints)) > 0:
+        raise RobotFileError(f"URDF {urdf}: its moving links have no mass (every <inertial><mass> after the "
+                             "first joint is 0 or missing), so it has no dynamics to optimise")
     model.name = model.name or urdf.stem
     return model
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -23,6 +24,7 @@ import pinocchio as pin
 from ..plots.contact import contact_series
 from ..plots.feet import MIRROR, contact_points_of, world_forces
 from ..plots.kinematics import floating_base, model_of
+from ..errors import ArgumentError
 from ..results import Result
 from .geometry import Part, part_poses, robot_parts
 
@@ -38,10 +40,21 @@ def b64(a: np.ndarray, dtype: str = "<f4") -> str:
 
 
 def sample_indices(t: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Indices of the samples nearest to t0, t0 + 1/rate, ..., the last sample included."""
+    """Indices of the samples nearest to t0, t0 + 1/rate, ..., the last sample included; the rate
+    must be positive and finite, and is at most the motion's own (a faster one would repeat samples)."""
     t = np.asarray(t, dtype=float)
-    n = int(np.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1
-    idx = np.abs(t[None, :] - (t[0] + np.arange(n) / rate_hz)[:, None]).argmin(axis=1)
+    own = (len(t) - 1) / (t[-1] - t[0]) if len(t) > 1 and t[-1] > t[0] else 1.0
+    try:
+        ok = not isinstance(rate_hz, bool) and math.isfinite(float(rate_hz)) and float(rate_hz) > 0
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ArgumentError(f"rate {rate_hz!r} Hz: must be a positive, finite number of frames per second of "
+                            "motion time")
+    rate_hz = min(float(rate_hz), own)
+    grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1) / rate_hz
+    right = np.clip(np.searchsorted(t, grid), 1, len(t) - 1) if len(t) > 1 else np.zeros(len(grid), int)
+    idx = right - (np.abs(grid - t[right - 1]) <= np.abs(t[right] - grid)) if len(t) > 1 else right
     return np.unique(np.append(idx, len(t) - 1))
 
 
