@@ -43,9 +43,11 @@ def _solve_arguments(sub: Any) -> None:
     s = sub.add_parser("solve", help="solve a problem and write result.json, trajectory.npz, gpdm.npz")
     s.add_argument("problem", help="problem name (see `list`) or path to a .toml file")
     s.add_argument("--tube", type=str, default=None, help='delta: a number, or "<k>x" relative (default: the problem\'s)')
-    s.add_argument("--latent-dim", type=int, default=None)
-    s.add_argument("--control-points", type=int, default=None)
-    s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
+    s.add_argument("--latent-dim", type=int, default=None, help="the GPDM's latent dimension d (default: the problem's)")
+    s.add_argument("--control-points", type=int, default=None,
+                   help="the latent B-spline's control points m (default: the problem's)")
+    s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None,
+                   help="Ipopt's Hessian: exact (CasADi) or its L-BFGS approximation (default: the problem's)")
     s.add_argument("--method", choices=list(dict.fromkeys(m for k in KINDS.values() for m in k.methods)),
                    default="latent", help="a method of the problem's kind (latentoc.kinds)")
     s.add_argument("--joint-range", type=_positive, default=None, help="baseline joint range, +-deg")
@@ -79,7 +81,7 @@ def _plot_arguments(sub: Any) -> None:
     """The ``plot`` command's arguments."""
     pl = sub.add_parser("plot", help="every figure of a result folder, from its files alone")
     pl.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz, gpdm.npz)")
-    pl.add_argument("--format", choices=["png", "pdf", "svg"], default="png")
+    pl.add_argument("--format", choices=["png", "pdf", "svg"], default="png", help="the figures' file format (default png)")
     pl.add_argument("--out", type=Path, default=None, help="output folder (default: RESULT/plots)")
     pl.add_argument("--no-gif", action="store_true", help="no motion.gif")
 
@@ -105,18 +107,21 @@ def _list_arguments(sub: Any) -> None:
     ls.add_argument("--verbose", action="store_true", help="every problem's resolved settings")
     ls.add_argument("--robots", action="store_true", help="the robot names a problem's `robot` or `learn --robot` takes")
     sh = sub.add_parser("show", help="a problem's resolved settings, one key per line")
-    sh.add_argument("problem")
+    sh.add_argument("problem", help="a packaged problem's name (python -m latentoc list) or a .toml file")
 
 
 def _sweep_arguments(sub: Any) -> None:
     """The ``sweep`` command's arguments."""
     w = sub.add_parser("sweep", help="tube sweep (and joint-range baseline), a table like the paper's Table 2")
-    w.add_argument("problem")
+    w.add_argument("problem", help="a packaged problem's name (python -m latentoc list) or a .toml file")
     w.add_argument("--tubes", nargs="*", default=None, help="tubes (numbers or <k>x); default: the problem's")
-    w.add_argument("--baseline", choices=["joint-range"], default=None)
-    w.add_argument("--ranges", nargs="*", type=_positive, default=None, help="joint ranges, deg")
-    w.add_argument("--latent-dim", type=int, default=None)
-    w.add_argument("--hessian", choices=["exact", "lbfgs"], default=None)
+    w.add_argument("--baseline", choices=["joint-range"], default=None,
+                   help="also solve the full configuration-space baseline at each of --ranges")
+    w.add_argument("--ranges", nargs="*", type=_positive, default=None,
+                   help="the baseline's joint ranges around the training motion, +-deg (default: the problem's)")
+    w.add_argument("--latent-dim", type=int, default=None, help="the GPDM's latent dimension d (default: the problem's)")
+    w.add_argument("--hessian", choices=["exact", "lbfgs"], default=None,
+                   help="Ipopt's Hessian: exact (CasADi) or its L-BFGS approximation (default: the problem's)")
     w.add_argument("--out", type=Path, default=None, help="folder of the sweep: OUT/<task>/ per solve, sweep.json")
     w.add_argument("--workers", type=int, default=None, help="solve on a Dask LocalCluster of N worker processes")
     w.add_argument("--scheduler", default=None, help="solve on an existing Dask cluster, tcp://HOST:PORT")
@@ -129,10 +134,10 @@ def _sweep_arguments(sub: Any) -> None:
 def _start_poses_arguments(sub: Any) -> None:
     """The ``start-poses`` command's arguments."""
     sp = sub.add_parser("start-poses", help="end-effector distances of new start poses vs tube (Sect. 4.1.4)")
-    sp.add_argument("problem")
-    sp.add_argument("--tubes", nargs="*", default=None)
-    sp.add_argument("--latent-dim", type=int, default=None)
-    sp.add_argument("--out", type=Path, default=None)
+    sp.add_argument("problem", help="a packaged problem's name (python -m latentoc list) or a .toml file")
+    sp.add_argument("--tubes", nargs="*", default=None, help="tubes (numbers or <k>x); default: the problem's")
+    sp.add_argument("--latent-dim", type=int, default=None, help="the GPDM's latent dimension d (default: the problem's)")
+    sp.add_argument("--out", type=Path, default=None, help="output folder")
 
 
 def _reproduce_arguments(sub: Any) -> None:
@@ -143,15 +148,16 @@ def _reproduce_arguments(sub: Any) -> None:
                    help="instead of the tables: the README's figures in docs/images (latentoc/readme_figures.py)")
     r.add_argument("--budgets", nargs="*", type=_positive, default=[10.0, 60.0, 300.0],
                    help="the sampling baseline's cumulative wall budgets, s")
-    r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md")
+    r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md",
+                   help="the Markdown file of the tables (default docs/reproduction.md)")
     r.add_argument("--quiet", action="store_true", help="no progress display")
 
 
 def _bench_arguments(sub: Any) -> None:
     """The ``bench`` command's arguments."""
     b = sub.add_parser("bench", help="run latentoc.benchmarks.<NAME>_bench")
-    b.add_argument("name")
-    b.add_argument("rest", nargs=argparse.REMAINDER)
+    b.add_argument("name", help="dynamics, gpdm, blocks, arm, jump or sampling")
+    b.add_argument("rest", nargs=argparse.REMAINDER, help="the benchmark's own arguments (bench NAME --help)")
 
 
 def _simulate_arguments(sub: Any) -> None:

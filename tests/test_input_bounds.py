@@ -142,3 +142,14 @@ def test_public_functions_name_a_wrong_argument():
     changed.settings["control_points"] = -3
     with pytest.raises(ProblemError, match="'control_points' .* must be an integer >= 2, got -3"):
         latentoc.solve(changed)
+
+
+def test_every_command_argument_has_help_text():
+    import argparse
+
+    from latentoc.cli import _parser
+
+    commands = [a for a in _parser()._actions if isinstance(a, argparse._SubParsersAction)][0].choices
+    missing = [f"{name} {a.dest}" for name, sub in commands.items() for a in sub._actions
+               if not a.help and not isinstance(a, argparse._HelpAction)]
+    assert not missing
