@@ -4,7 +4,13 @@ Marked here by rule: every notebook (``notebook`` and ``slow``) and every test t
 jump's set-up (its GPDM, phases and row blocks take tens of seconds to build). The test modules
 mark their own other slow tests (solves, subprocesses, clusters) with ``pytest.mark.slow``.
 """
+import os
+
 import pytest
+
+# nbmake's kernels inherit it: the broad-jump notebook stops after a few iterations under test (its
+# committed outputs are a full solve, `python -m latentoc notebooks`)
+os.environ.setdefault("LATENTOC_NOTEBOOK_QUICK", "1")
 
 SLOW_FIXTURES = {"jump_setup"}  # tests/conftest.py: the broad jump's set-up, shared by the session
 

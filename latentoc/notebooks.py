@@ -58,15 +58,18 @@ def run_notebook(path: Path, timeout: int = 3600) -> dict[str, Any]:
     nb = nbformat.read(path, as_version=4)
     start, stop = nbformat.v4.new_code_cell(_START), nbformat.v4.new_code_cell(_STOP)
     nb.cells = [start, *nb.cells, stop]
-    quiet = os.environ.get("LATENTOC_QUIET")
-    os.environ["LATENTOC_QUIET"] = "1"  # the kernel inherits it
+    # the kernel inherits the environment: quiet progress, and committed outputs are never a quick test run
+    saved = {k: os.environ.get(k) for k in ("LATENTOC_QUIET", "LATENTOC_NOTEBOOK_QUICK")}
+    os.environ["LATENTOC_QUIET"] = "1"
+    os.environ.pop("LATENTOC_NOTEBOOK_QUICK", None)
     try:
         NotebookClient(nb, timeout=timeout, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}).execute()
     finally:
-        if quiet is None:
-            del os.environ["LATENTOC_QUIET"]
-        else:
-            os.environ["LATENTOC_QUIET"] = quiet
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
     inputs = json.loads("".join(o.get("text", "") for o in stop.outputs if o.output_type == "stream"))
     nb.cells = nb.cells[1:-1]
     imported = set().union(*(module_files(c.source) for c in nb.cells if c.cell_type == "code"))
