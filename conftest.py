@@ -11,6 +11,10 @@ import pytest
 # nbmake's kernels inherit it: the broad-jump notebook stops after a few iterations under test (its
 # committed outputs are a full solve, `python -m latentoc notebooks`)
 os.environ.setdefault("LATENTOC_NOTEBOOK_QUICK", "1")
+# The tests check values, not speed: the NLP Functions are evaluated in CasADi's virtual machine, not
+# compiled (gcc takes ~10 min for the broad jump's node Jacobians on a cold machine; the compiled path
+# has its own tests, and `python -m latentoc bench` measures it). LATENTOC_JIT=1 compiles.
+os.environ.setdefault("LATENTOC_JIT", "0")
 
 SLOW_FIXTURES = {"jump_setup"}  # tests/conftest.py: the broad jump's set-up, shared by the session
 

@@ -50,7 +50,7 @@ def _solve_arguments(sub: Any) -> None:
                    help="Ipopt's Hessian: exact (CasADi) or its L-BFGS approximation (default: the problem's)")
     s.add_argument("--method", choices=list(dict.fromkeys(m for k in KINDS.values() for m in k.methods)),
                    default="latent", help="a method of the problem's kind (latentoc.kinds)")
-    s.add_argument("--joint-range", type=_positive, default=None, help="baseline joint range, +-deg")
+    s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>-<method>)")
     s.add_argument("--quiet", action="store_true", help="no progress display")
     s.add_argument("--verbose", action="store_true", help="Ipopt's own iteration log")

@@ -1,7 +1,17 @@
 """Shared fixtures."""
+import signal
 from types import SimpleNamespace
 
 import pytest
+
+
+@pytest.fixture
+def sigint_default():
+    """Ctrl-C as in a user's process: Python's own SIGINT handler in this process and SIG_DFL in the
+    processes it starts (pytest-xdist's workers ignore SIGINT, and children inherit the ignoring)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
 
 
 @pytest.fixture(scope="session")

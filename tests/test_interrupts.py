@@ -14,6 +14,8 @@ from fake_solver import install, solution
 import latentoc
 from latentoc.cli import main
 
+pytestmark = pytest.mark.usefixtures("sigint_default")
+
 REPO = Path(__file__).resolve().parents[1]
 
 

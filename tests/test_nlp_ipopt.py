@@ -134,6 +134,7 @@ def _interrupting(nlp, after: int):
     return calls
 
 
+@pytest.mark.usefixtures("sigint_default")
 def test_ctrl_c_inside_ipopt_raises_instead_of_a_result(monkeypatch, tmp_path):
     """CasADi turns an exception inside a callback into the status NonIpopt_Exception_Thrown and
     returns a point; the solve must raise KeyboardInterrupt instead, and stop at once."""

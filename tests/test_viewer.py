@@ -238,8 +238,8 @@ def changed(a: np.ndarray, b: np.ndarray) -> int:
     return int(np.sum(np.abs(view_of(a) - view_of(b)).max(axis=2) > 30))
 
 
-@pytest.mark.slow  # starts a browser four times per page (about 5 s each)
-@pytest.mark.parametrize("name", ["panda", "jump"])  # meshes; capsules with contacts
+@pytest.mark.slow  # starts a browser four times (about 5 s each); the jump's page: the test below
+@pytest.mark.parametrize("name", ["panda"])  # meshes
 def test_the_page_draws_the_robot_and_animates_in_a_browser(pages, name, tmp_path):
     if chromium() is None:
         pytest.skip("no chromium on this machine (apt-get install chromium; .ci/run installs it)")
@@ -257,9 +257,6 @@ def test_the_page_draws_the_robot_and_animates_in_a_browser(pages, name, tmp_pat
     late = screenshot(page, tmp_path / "late.png", 300, url_suffix="#t=1.2")
     assert changed(early, blank) > 2000, "the robot is not drawn"
     assert changed(early, late) > 300, "the pose does not follow the motion's time"
-    if name == "jump":  # the friction cones are the only green in the scene
-        r, g, b = (view_of(early)[..., k] for k in range(3))
-        assert np.sum((g > r + 30) & (g > b + 10)) > 50
 
 
 def shown_contacts(page, t: float) -> tuple[int, list[dict]]:
@@ -270,12 +267,12 @@ def shown_contacts(page, t: float) -> tuple[int, list[dict]]:
     return frame, json.loads(html.unescape(re.search(r'data-contacts="([^"]*)"', text).group(1)))
 
 
-@pytest.mark.slow  # starts a browser six times (about 5 s each)
+@pytest.mark.slow  # starts a browser seven times (about 5 s each)
 def test_the_jump_page_draws_every_contact_point_in_a_browser(pages, tmp_path):
     """The broad jump in the export's format, in chromium: in the stance all four points of each foot
     have their arrow and cone, where the jump's own code puts the points, each arrow as long as its
-    force; in the flight none; the arrows and the initial motion's ghost are drawn (against the same
-    page without them)."""
+    force; in the flight none; the robot, the arrows, the friction cones and the initial motion's
+    ghost are drawn (against the same page without them), and the pose follows the time."""
     if chromium() is None:
         pytest.skip("no chromium on this machine (apt-get install chromium; .ci/run installs it)")
     jump = pages["jump"]
@@ -296,7 +293,12 @@ def test_the_jump_page_draws_every_contact_point_in_a_browser(pages, tmp_path):
     stance = screenshot(jump[""], tmp_path / "stance.png", 300, url_suffix="#t=0.1")
     bare = screenshot(jump["-no-forces"], tmp_path / "bare.png", 300, url_suffix="#t=0.1")
     assert changed(stance, bare) > 100, "the force arrows are not drawn"
+    r, g, b = (view_of(stance)[..., k] for k in range(3))
+    assert np.sum((g > r + 30) & (g > b + 10)) > 50, "no friction cone"  # the only green in the scene
+    blank = screenshot(jump["-empty"], tmp_path / "blank.png", 300, url_suffix="#t=0.1")
+    assert changed(stance, blank) > 2000, "the robot is not drawn"
     flight = screenshot(jump[""], tmp_path / "flight.png", 300, url_suffix="#t=0.6")
+    assert changed(stance, flight) > 300, "the pose does not follow the motion's time"
     alone = screenshot(jump["-no-ghost"], tmp_path / "alone.png", 300, url_suffix="#t=0.6")
     assert changed(flight, alone) > 1000, "the initial motion's ghost is not drawn"
 
