@@ -42,7 +42,8 @@ def _solve_arguments(sub: Any) -> None:
     """The ``solve`` command's arguments."""
     s = sub.add_parser("solve", help="solve a problem and write result.json, trajectory.npz, gpdm.npz")
     s.add_argument("problem", help="problem name (see `list`) or path to a .toml file")
-    s.add_argument("--tube", type=str, default=None, help='delta: a number, or "<k>x" relative (default: the problem\'s)')
+    s.add_argument("--tube", type=str, default=None, help='"<k>x": k times the training motion\'s own tube (Eq. 30); a bare number: the absolute bound delta on '
+                        'sigma^2 (Eq. 29), printed with its multiple of the noise in the summary (default: the problem\'s)')
     s.add_argument("--latent-dim", type=int, default=None, help="the GPDM's latent dimension d (default: the problem's)")
     s.add_argument("--control-points", type=int, default=None,
                    help="the latent B-spline's control points m (default: the problem's)")

@@ -1,5 +1,6 @@
-"""What a long step shows on the terminal: tqdm bars on stderr, silenced by ``--quiet``
-(:func:`set_quiet`) or ``LATENTOC_QUIET=1``."""
+"""What a long step shows: tqdm bars on stderr where someone watches (a terminal, a Jupyter kernel),
+a line when a step starts and one when it ends where stderr is a log or a pipe (``LATENTOC_PROGRESS
+= bars | lines`` chooses); silenced by ``--quiet`` (:func:`set_quiet`) or ``LATENTOC_QUIET=1``."""
 from __future__ import annotations
 
 import os
@@ -28,11 +29,48 @@ def quiet() -> bool:
     return _QUIET
 
 
+class _Lines(tqdm):
+    """A tqdm bar for a log: no redraws, a line when it starts and one when it ends."""
+
+    def __init__(self, *args, **kwargs) -> None:  # type: ignore[no-untyped-def]
+        super().__init__(*args, **kwargs)
+        if not self.disable:
+            self._line("...")
+
+    def display(self, msg: str | None = None, pos: int | None = None) -> None:  # type: ignore[override]
+        return None
+
+    def close(self) -> None:
+        if not self.disable:
+            post = f", {self.postfix}" if self.postfix else ""
+            self._line(f"done, {self.n} {self.unit} in {self._time() - self.start_t:.1f} s{post}")
+        super().close()
+
+    def _line(self, text: str) -> None:
+        self.fp.write(f"{self.desc}: {text}\n")
+        self.fp.flush()
+
+
+def _watched() -> bool:
+    """Whether stderr is watched live (bars) rather than kept (lines): module doc."""
+    mode = os.environ.get("LATENTOC_PROGRESS", "")
+    if mode in ("bars", "lines"):
+        return mode == "bars"
+    if "ipykernel" in sys.modules:
+        return True
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
 def bar(iterable: Iterable[T] | None = None, *, total: int | None = None, desc: str = "", unit: str = "it",
         leave: bool = False) -> tqdm:
-    """A tqdm progress bar on stderr (disabled when quiet)."""
-    return tqdm(iterable, total=total, desc=desc, unit=unit, leave=leave, disable=_QUIET, file=sys.stderr,
-                dynamic_ncols=True)
+    """A tqdm progress bar on stderr, or its start and end lines in a log (disabled when quiet)."""
+    if _watched():
+        return tqdm(iterable, total=total, desc=desc, unit=unit, leave=leave, disable=_QUIET, file=sys.stderr,
+                    dynamic_ncols=True)
+    return _Lines(iterable, total=total, desc=desc, unit=unit, leave=False, disable=_QUIET, file=sys.stderr)
 
 
 @contextmanager

@@ -2,6 +2,7 @@
 the priors imply along the latent rescaling (known analytically), smooth latent trajectories, a
 known latent circle, several sequences, input validation."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -92,18 +93,25 @@ def test_the_arms_minimum_is_the_previous_learners():
     np.testing.assert_allclose(new[N * d:], old[N * d:], atol=1e-6)
 
 
-def test_learning_shows_its_progress(capsys):
-    """Iteration, L and the Newton decrement on stderr while learning (tqdm, latentoc.progress)."""
+@pytest.mark.parametrize("mode", ["bars", "lines"])
+def test_learning_shows_its_progress(capsys, monkeypatch, mode):
+    """Iteration, L and the Newton decrement on stderr while learning (tqdm, latentoc.progress): a bar
+    redrawn in place on a terminal, in a log one line when it starts and one when it ends."""
     from latentoc.progress import quiet, set_quiet
 
+    monkeypatch.setenv("LATENTOC_PROGRESS", mode)
     was = quiet()
     set_quiet(False)
     try:
-        learn_gpdm(synthetic_motion(30, 5, seed=3, noise=0.05), GPDMSettings(latent_dim=2))
+        model = learn_gpdm(synthetic_motion(30, 5, seed=3, noise=0.05), GPDMSettings(latent_dim=2))
     finally:
         set_quiet(was)
     err = capsys.readouterr().err
     assert "GPDM on 30 frames" in err and "L = " in err and "decrement" in err
+    if mode == "lines":
+        start, end = err.splitlines()
+        assert "\r" not in err and start == "GPDM on 30 frames: ..." and model.learning.converged
+        assert re.fullmatch(r"GPDM on 30 frames: done, [0-9]+ it in [0-9.]+ s, L = \S+, decrement \S+", end)
 
 
 def test_prior_fixes_the_latent_scale_as_predicted(motion):

@@ -105,7 +105,7 @@ def _run_and_interrupt(args, wait_for, timeout=300):
     """Start ``python -m latentoc ARGS``, send SIGINT once stderr shows ``wait_for`` (Ipopt's
     progress bar), and return (exit code, stdout, stderr)."""
     p = subprocess.Popen([sys.executable, "-m", "latentoc", *args], cwd=REPO, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, env={**os.environ, "LATENTOC_QUIET": "0"})
+                         stderr=subprocess.PIPE, env={**os.environ, "LATENTOC_QUIET": "0", "LATENTOC_PROGRESS": "bars"})
     os.set_blocking(p.stderr.fileno(), False)
     err, t0 = b"", time.time()
     while wait_for.encode() not in err and time.time() - t0 < timeout and p.poll() is None:
