@@ -55,6 +55,7 @@ def cmd_learn(args: argparse.Namespace) -> int:
     print(f"  GPDM d = {s['latent_dim']} on {s['learned_frames']} frames in {s['learning_time_s']:.2f} s{ended}")
     print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
           f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
+    print("  per joint: " + ", ".join(f"{name} {e:.3g}" for name, e in s["reconstruction_rmse_per_joint"].items()))
     print("  wrote " + ", ".join(str(p) for p in paths))
     return 0
 

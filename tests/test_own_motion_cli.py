@@ -36,8 +36,11 @@ def test_learn_writes_the_model_its_error_and_tube(tmp_path, capsys):
     out = tmp_path / "learned"
     assert main(["learn", str(f), "--robot", "ur5", "--latent-dim", "2", "--stride", "2", "--out", str(out),
                  "--plots"]) == 0
-    assert "41 frames at 20 Hz (2 s) of 6 joints" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "41 frames at 20 Hz (2 s) of 6 joints" in printed
     summary = json.loads((out / "learn.json").read_text())
+    assert "  per joint: " + ", ".join(f"{n} {e:.3g}" for n, e in summary["reconstruction_rmse_per_joint"].items()) \
+        in printed.splitlines()
     gp = GPDM.load(out / "gpdm.npz")
     assert gp.latent_dim == 2 and gp.X.shape == (21, 2) and summary["learned_frames"] == 21
     assert np.array_equal(gp.Y, np.loadtxt(f, delimiter=",", skiprows=1)[::2, 1:])
