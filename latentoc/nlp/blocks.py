@@ -28,6 +28,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,7 +38,15 @@ import numpy as np
 from ..progress import bar
 from . import jit
 
-__all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks"]
+__all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks", "compile_seconds"]
+
+_COMPILE_SECONDS = [0.0]  # this process's time in compile_blocks building and compiling derivatives
+
+
+def compile_seconds() -> float:
+    """Seconds this process has spent building and compiling blocks' derivatives (a solve reports
+    the difference over its build and its rounds as its compile time)."""
+    return _COMPILE_SECONDS[0]
 
 # bump when the derivative Functions made from the same rows change: the cache index keys on it
 BLOCK_VERSION = "2"
@@ -207,6 +216,16 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
         todo.append(b)
     if not todo:
         return blocks
+    started = time.perf_counter()
+    try:
+        _compile(todo)
+    finally:
+        _COMPILE_SECONDS[0] += time.perf_counter() - started
+    return blocks
+
+
+def _compile(todo: list[RobotBlock]) -> None:
+    """Build, compile (or find compiled) and load the derivative libraries of the blocks ``todo``."""
     fns: dict[str, dict[str, ca.Function]] = {}
     futures: dict[str, list] = {}
     with jit.Compiler() as cc:
@@ -230,7 +249,6 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
                                    "instructions": b.instructions}))
         os.replace(tmp, index)
         b.functions = _load(b, [str(p) for p in libs])
-    return blocks
 
 
 def stack_tangents(G: np.ndarray) -> np.ndarray:
