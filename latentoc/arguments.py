@@ -17,6 +17,7 @@ def _got(value: Any) -> str:
 
 def expect(function: str, name: str, value: Any, types: type | tuple[type, ...], what: str) -> None:
     """An ArgumentError unless ``value`` is an instance of ``types`` (bools are not numbers)."""
-    if isinstance(value, types) and not (isinstance(value, bool) and bool not in (types if isinstance(types, tuple) else (types,))):
+    allowed = types if isinstance(types, tuple) else (types,)
+    if isinstance(value, allowed) and (bool in allowed or not isinstance(value, bool)):
         return
     raise ArgumentError(f"{function}(): argument {name!r} must be {what}, got {_got(value)}")

@@ -6,6 +6,8 @@
   removed first and written last, so at no moment does a folder claim a mixture of two writes;
   writers into the same parent folder take turns (an exclusive lock on the parent), so two
   processes saving into one folder leave one whole write, the last.
+* :func:`exclusive_lock`: processes take turns on a folder or a lock file (result folders, the
+  compiled-library cache).
 * :func:`check_out_dir`: ``--out`` must be a folder (or not exist yet) that can be written,
   checked before any work.
 * :func:`dumps_json`: strict JSON (no ``NaN``/``Infinity`` tokens): a non-finite float is the
@@ -30,8 +32,8 @@ import numpy as np
 
 from .errors import LatentocError
 
-__all__ = ["OutputError", "NPZ_ERRORS", "atomic_write", "write_folder", "check_out_dir", "dumps_json", "plain",
-           "json_number", "sha256", "NON_FINITE"]
+__all__ = ["OutputError", "NPZ_ERRORS", "atomic_write", "write_folder", "check_out_dir", "exclusive_lock", "dumps_json",
+           "plain", "json_number", "sha256", "NON_FINITE"]
 
 #: what reading a damaged, truncated, empty or foreign .npz raises (numpy, zipfile, json)
 NPZ_ERRORS: tuple[type[BaseException], ...] = (OSError, ValueError, KeyError, TypeError, EOFError,
@@ -127,7 +129,7 @@ def write_folder(files: Mapping[str, bytes], out_dir: str | Path, marker: str, o
         for name in names:
             _write_bytes(tmp / name, files[name])
         os.chmod(tmp, 0o777 & ~_UMASK)
-        with _writers_take_turns(out.parent):
+        with exclusive_lock(out.parent):  # writers into one parent take turns
             _remove_abandoned(out)
             try:
                 os.rename(tmp, out)  # the target did not exist: the whole folder at once
@@ -158,15 +160,15 @@ def _remove_abandoned(out: Path) -> None:
 
 
 @contextmanager
-def _writers_take_turns(parent: Path) -> Iterator[None]:
-    """An exclusive advisory lock on the folder ``parent`` (POSIX flock; released on exit, also when
-    the process dies); without fcntl (Windows) no lock."""
+def exclusive_lock(path: Path) -> Iterator[None]:
+    """Hold an exclusive advisory lock on ``path``, a folder or a lock file (created if missing):
+    POSIX flock, released on exit, also when the process dies; without fcntl (Windows) no lock."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover
         yield
         return
-    fd = os.open(parent, os.O_RDONLY)
+    fd = os.open(path, os.O_RDONLY) if path.is_dir() else os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o666)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         yield

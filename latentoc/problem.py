@@ -55,10 +55,7 @@ class Problem:
     def validate(self) -> Problem:
         """This problem with every setting checked again, as the file's keys are (a ProblemError
         naming the key): its ``settings`` dict may have been changed in place since it was loaded."""
-        where = f"problem {self.name!r}"
-        settings = self.schema.override(self.settings, self.settings, where)
-        return checked(Problem(name=check_name(self.name, where), schema=self.schema, settings=settings,
-                               description=self.description, source=self.source), where)
+        return self.replace(**self.settings)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: name, kind, description, source and every setting (read back by

@@ -230,15 +230,15 @@ def _array_problem(traj: Mapping[str, np.ndarray]) -> str | None:
     model = traj["model"]
     if model.ndim != 0 or model.dtype.kind != "U":
         return f"'model' must be one string (Pinocchio's saveToString), got {model.dtype} of shape {model.shape}"
+    robot = pin.Model()
     try:
-        nq = pin.Model()
-        nq.loadFromString(str(model))
+        robot.loadFromString(str(model))
     except (RuntimeError, ValueError) as exc:
         return f"'model' is not a Pinocchio model string ({exc})"
     t = traj["t"]
     if t.ndim != 1 or len(t) < 1 or t.dtype.kind not in "fi" or not np.isfinite(t).all() or (np.diff(t) <= 0).any():
         return "'t' must be finite, increasing times (one row per sample)"
-    shapes = {"q": nq.nq, "v": nq.nv, "a": nq.nv}
+    shapes = {"q": robot.nq, "v": robot.nv, "a": robot.nv}
     for key in ("q", "v", "a", "tau"):
         a = traj[key]
         if a.ndim != 2 or len(a) != len(t) or (key in shapes and a.shape[1] != shapes[key]):

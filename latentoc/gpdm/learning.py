@@ -39,6 +39,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..arguments import expect
 from ..progress import bar
 from ..threads import blas_threads
 from .hessian import hessian
@@ -143,9 +144,8 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     Module docstring: the model and the procedure. Raises :class:`~latentoc.gpdm.size.GPDMSizeError` before anything is
     computed when the data need more memory than the machine has.
     """
-    if settings is not None and not isinstance(settings, GPDMSettings):
-        raise GPDMInputError(f"learn_gpdm(): argument 'settings' must be a GPDMSettings or None, got "
-                             f"{type(settings).__name__} {settings!r:.60}")
+    if settings is not None:
+        expect("learn_gpdm", "settings", settings, GPDMSettings, "a GPDMSettings or None")
     return _learn(Y, GPDMSettings() if settings is None else settings, COARSE_ABOVE)
 
 

@@ -17,14 +17,13 @@ import shutil
 import subprocess
 import tempfile
 import warnings
-from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
-from contextlib import contextmanager
 from pathlib import Path
 
 import casadi as ca
 
 from ..errors import LatentocError
+from ..files import exclusive_lock
 from ..paths import cache_dir
 from ..progress import bar
 
@@ -115,22 +114,6 @@ def cached_library(name: str) -> Path | None:
     return None
 
 
-@contextmanager
-def _locked(lib: Path) -> Iterator[None]:
-    """Hold an exclusive lock on ``lib``'s lock file (POSIX ``flock``; no lock where there is none)."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX: two processes may compile the same library (renames stay atomic)
-        yield
-        return
-    with open(lib.with_name(lib.name + ".lock"), "a") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
-
-
 class Compiler:
     """Compiles C sources to shared libraries in the background, ``workers`` at a time, while the
     caller generates the next ones; a library already in the cache is not compiled again.
@@ -172,7 +155,9 @@ class Compiler:
         cache = cache_dir()
         try:
             cache.mkdir(parents=True, exist_ok=True)
-            with _locked(lib), tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
+            # one process compiles a library others need at once; the others wait and find it
+            lock = exclusive_lock(lib.with_name(lib.name + ".lock"))
+            with lock, tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
                 if cached_library(lib.name) is not None:  # another process compiled it while we waited
                     return lib
                 c_file, so_file = Path(tmp) / f"{lib.stem}.c", Path(tmp) / lib.name
