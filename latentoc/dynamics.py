@@ -106,9 +106,6 @@ class _PinocchioCasadiBackend:
             M = cpin.crba(cmodel, cdata, q)
             M = casadi.triu(M) + casadi.triu(M, False).T
             return casadi.Function(name, [q], [M], ["q"], ["M"])
-        if name == "aba":
-            tau = casadi.SX.sym("tau", model.nv)
-            return casadi.Function(name, [q, v, tau], [cpin.aba(cmodel, cdata, q, v, tau)], ["q", "v", "tau"], ["a"])
         if name == "integrate":
             dv = casadi.SX.sym("dv", model.nv)
             return casadi.Function(name, [q, dv], [cpin.integrate(cmodel, q, dv)], ["q", "dv"], ["q_next"])
@@ -186,7 +183,6 @@ class SymbolicModel:
     centroidal_momentum = _cached("centroidal_momentum", "(q, v) -> [6]: linear momentum, angular momentum about the COM.")
     centroidal_momentum_rate = _cached("centroidal_momentum_rate", "(q, v, a) -> [6]: time derivative of the centroidal momentum.")
     mass_matrix = _cached("mass_matrix", "(q) -> M [nv x nv], full symmetric.")
-    aba = _cached("aba", "(q, v, tau) -> a, forward dynamics.")
     integrate = _cached("integrate", "(q, dv) -> q (+) dv on the configuration Lie group.")
     difference = _cached("difference", "(q0, q1) -> dv with q0 (+) dv = q1.")
 

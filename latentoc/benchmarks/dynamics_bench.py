@@ -34,7 +34,7 @@ def bench_robot(name: str, repeats: int = 200) -> dict:
     start = time.perf_counter()
     sym = SymbolicModel(model)
     functions = [sym.rnea, sym.com, sym.centroidal_momentum, sym.centroidal_momentum_rate,
-                 sym.mass_matrix, sym.aba, sym.integrate, sym.difference]
+                 sym.mass_matrix, sym.integrate, sym.difference]
     frame = model.frames[model.nframes - 1].name
     functions += [sym.frame_placement(frame), sym.frame_velocity(frame), sym.frame_jacobian(frame)]
     build = time.perf_counter() - start

@@ -26,7 +26,6 @@ NB_MODULE(_bridge, m) {
       .def("frame_velocity", &latentoc::build_frame_velocity, nb::arg("frame"))
       .def("frame_jacobian", &latentoc::build_frame_jacobian, nb::arg("frame"))
       .def("mass_matrix", &latentoc::build_mass_matrix)
-      .def("aba", &latentoc::build_aba)
       .def("integrate", &latentoc::build_integrate)
       .def("difference", &latentoc::build_difference);
 }

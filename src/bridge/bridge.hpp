@@ -53,7 +53,6 @@ std::string build_frame_placement(const BridgeModel& m, const std::string& frame
 std::string build_frame_velocity(const BridgeModel& m, const std::string& frame);
 std::string build_frame_jacobian(const BridgeModel& m, const std::string& frame);
 std::string build_mass_matrix(const BridgeModel& m);
-std::string build_aba(const BridgeModel& m);
 std::string build_integrate(const BridgeModel& m);
 std::string build_difference(const BridgeModel& m);
 
