@@ -14,6 +14,7 @@ This module parses the command line; each command is :mod:`latentoc.commands`' `
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
@@ -25,6 +26,22 @@ from .kinds import KINDS
 from .simulate import command as simulate
 
 __all__ = ["main"]
+
+
+def _held_joint(text: str) -> tuple[str, float | None]:
+    """``--hold JOINT[=VALUE]``: the joint's name and its value (None: the model's neutral)."""
+    name, sep, value = text.partition("=")
+    if not name.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: give a joint name, JOINT or JOINT=VALUE")
+    if not sep:
+        return name.strip(), None
+    try:
+        number = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: VALUE {value!r} is not a number") from None
+    if not math.isfinite(number):
+        raise argparse.ArgumentTypeError(f"{text!r}: VALUE must be finite")
+    return name.strip(), number
 
 
 def _positive(text: str) -> float:
@@ -76,6 +93,9 @@ def _learn_arguments(sub: Any) -> None:
     ln.add_argument("--start", type=int, default=None, help="first frame (0-based)")
     ln.add_argument("--stop", type=int, default=None, help="one past the last frame")
     ln.add_argument("--fps", type=_positive, default=120.0, help="frame rate of an .amc motion (default 120)")
+    ln.add_argument("--hold", action="append", default=[], metavar="JOINT[=VALUE]", type=_held_joint,
+                    help="a joint the file does not move, held at VALUE (rad or m) or at the model's neutral "
+                         "(repeat for each; every joint without a column must be named)")
 
 
 def _plot_arguments(sub: Any) -> None:

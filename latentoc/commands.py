@@ -44,7 +44,9 @@ def cmd_learn(args: argparse.Namespace) -> int:
     check_out_dir(args.out)
     learned, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
                                 plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
-                                start=args.start, stop=args.stop, fps=args.fps)
+                                start=args.start, stop=args.stop, fps=args.fps,
+                                fixed_pose={n: v for n, v in args.hold if v is not None},
+                                locked=[n for n, v in args.hold if v is None])
     s = learned.summary()
     demo = s["demonstration"]
     print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
@@ -256,7 +258,7 @@ def cmd_start_poses(args: argparse.Namespace) -> int:
     from .problem_files import load_problem
     from .results import write_json
     from .robots import load_robot
-    from .tube import resolve_tube
+    from .tube import tube_delta
     from .start_poses import start_pose_distances
 
     problem = load_problem(args.problem, **overrides(args, "latent_dim"))
@@ -270,7 +272,7 @@ def cmd_start_poses(args: argparse.Namespace) -> int:
     gp, _ = problem_gpdm(problem)
     specs = problem.start_pose_tubes if args.tubes is None else [tube_arg(t) for t in args.tubes]
     ref = gp.tube_size()
-    deltas = [resolve_tube(s, ref) for s in specs]
+    deltas = [tube_delta(s, gp) for s in specs]
     rows = start_pose_distances(gp, load_robot(problem.robot), problem.start_pose_frame, deltas)
     print(f"start poses of {problem.name} (relative tubes x tube_training = {ref:.4g}), frame {problem.start_pose_frame}")
     print("| tube | delta | latent dist | translational dist (m), Eq. 31 | pose dist, Eq. 32 |")

@@ -137,10 +137,12 @@ def figures(learned: LearnedMotion, title: str) -> dict[str, bytes]:
 def learn_file(path: str | Path, robot: str, out: str | Path, *, latent_dim: int = 3, stride: int = 1,
                plots: bool = False, clip_to_limits: bool = False, rate: float | None = None,
                asf: str | Path | None = None, start: int | None = None, stop: int | None = None,
-               fps: float = 120.0) -> tuple[LearnedMotion, list[Path]]:
-    """The ``learn`` command: read, learn, then write the folder ``out`` (module doc)."""
+               fps: float = 120.0, fixed_pose: dict[str, float] | None = None,
+               locked: list[str] | None = None) -> tuple[LearnedMotion, list[Path]]:
+    """The ``learn`` command: read, learn, then write the folder ``out`` (module doc); ``fixed_pose``
+    and ``locked``: the joints the file does not move (:func:`~latentoc.motions.demonstration_from_file`)."""
     demo = demonstration_from_file(path, robot_from_argument(robot), asf=asf, fps=fps, start=start, stop=stop,
-                                   rate=rate, clip_to_limits=clip_to_limits)
+                                   rate=rate, fixed_pose=fixed_pose, locked=locked, clip_to_limits=clip_to_limits)
     learned = learn_motion(demo, latent_dim, stride)
     with tempfile.TemporaryDirectory() as tmp:  # GPDM.save writes to a path
         learned.gpdm.save(Path(tmp) / GPDM_NAME)

@@ -24,7 +24,7 @@ from .errors import ProblemError, SolveError
 from .gpdm import GPDM
 from .schema import Check
 
-__all__ = ["parse_tube", "TUBE", "resolve_tube", "relative_tube", "TubeResult"]
+__all__ = ["parse_tube", "TUBE", "resolve_tube", "tube_delta", "relative_tube", "TubeResult"]
 
 
 def parse_tube(spec: float | int | str) -> tuple[float, bool]:
@@ -69,6 +69,21 @@ def resolve_tube(spec: float | str, reference: float | Callable[[], float]) -> f
     if not relative:
         return value
     return value * float(reference() if callable(reference) else reference)
+
+
+def tube_delta(spec: float | str, gpdm: GPDM) -> float:
+    """delta of a tube spec for ``gpdm`` (:func:`resolve_tube` against its Eq. 30 tube); a
+    :class:`ProblemError` for an absolute delta at or above :attr:`GPDM.prior_variance`, the
+    largest sigma^2 anywhere: such a tube bounds nothing, and is mostly a "5x" written as "5"."""
+    training = gpdm.tube_size()
+    delta = resolve_tube(spec, training)
+    ceiling = gpdm.prior_variance
+    if not parse_tube(spec)[1] and delta >= ceiling:
+        raise ProblemError(
+            f"tube delta = {delta:.4g} is at or above {ceiling:.4g}, the largest sigma^2 (Eq. 19) this "
+            f"GPDM gives anywhere, so it would bound nothing; \"{delta:g}x\" is {delta:g} times the training "
+            f"motion's own tube (delta = {delta * training:.4g}; 1x = {training:.4g})")
+    return delta
 
 
 def relative_tube(delta: float, gpdm: GPDM) -> float:

@@ -115,9 +115,29 @@ def test_list_verbose_into_a_closed_pipe_ends_quietly():
 
 
 @pytest.mark.slow  # a solve
-def test_a_tube_of_1e308_writes_strict_json(tmp_path):
-    """tube = 1e308: delta x beta_3 overflows; result.json holds "Infinity", not the token Infinity
+def test_a_tube_of_1_7e308x_writes_strict_json(tmp_path):
+    """tube = 1.7e308x: delta x beta_3 overflows; result.json holds "Infinity", not the token Infinity
     that JSON readers refuse, and reads back."""
-    assert main(["solve", "arm-raise-small", "--tube", "1e308", "--quiet", "--out", str(tmp_path)]) == 0
+    assert main(["solve", "arm-raise-small", "--tube", "1.7e308x", "--quiet", "--out", str(tmp_path)]) == 0
     json.loads((tmp_path / "result.json").read_text(), parse_constant=lambda c: pytest.fail(c))
-    assert latentoc.load_result(tmp_path).tube.delta == 1e308
+    r = latentoc.load_result(tmp_path)
+    assert r.tube.delta == pytest.approx(1.7e308 * r.tube.training) and r.tube.relative == float("inf")
+
+
+def test_an_absolute_tube_that_bounds_nothing_is_refused(tmp_path, capsys):
+    """--tube 5 is delta = 5, above beta1 + 1/beta3, the largest sigma^2 (Eq. 19) the GPDM gives
+    anywhere (its value far from the data, computed here from the GPDM's variance): refused before
+    the solve, showing the 5x spelling and its delta; 0.5 (below the ceiling) is a tube."""
+    from latentoc.min_torque.training import problem_gpdm
+    from latentoc.tube import tube_delta
+
+    problem = latentoc.load_problem("arm-raise-small")
+    gp, _ = problem_gpdm(problem)
+    far = float(gp.variance(gp.X.max(axis=0) + 100.0))
+    assert far == pytest.approx(gp.prior_variance, rel=1e-12) and 0.5 < far < 5
+    err = _fails(capsys, ["solve", "arm-raise-small", "--tube", "5", "--quiet", "--out", str(tmp_path / "o")],
+                 "tube delta = 5 is at or above", tmp_path / "o")
+    assert f'"5x" is 5 times the training motion\'s own tube (delta = {5 * gp.tube_size():.4g}' in err
+    assert tube_delta(0.5, gp) == 0.5 and tube_delta("60x", gp) == pytest.approx(60 * gp.tube_size())
+    with pytest.raises(latentoc.LatentocError, match="bound nothing"):
+        latentoc.solve(problem.replace(tube=far))

@@ -1,6 +1,7 @@
 """Motion files (latentoc.motions): CSV, NPZ and ASF + AMC on a robot, joint
 order, locked joints, resampling, limits, and every bad input as a MotionFileError naming the file;
 the CSV reader fuzzed (only latentoc's error type escapes)."""
+import json
 from pathlib import Path
 
 import numpy as np
@@ -67,7 +68,7 @@ def test_a_subset_locks_the_other_joints_at_fixed_pose_or_neutral(tmp_path, pand
     Q += np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])  # inside panda_joint4's and _joint6's limits
     names = [f"panda_joint{i}" for i in range(1, 8)]
     f = write_csv(tmp_path / "m.csv", names, t, Q)
-    demo = demonstration_from_file(f, panda, fixed_pose={"panda_finger_joint1": 0.03})
+    demo = demonstration_from_file(f, panda, fixed_pose={"panda_finger_joint1": 0.03}, locked=["panda_finger_joint2"])
     assert demo.locked == {"panda_finger_joint1": [0.03], "panda_finger_joint2": [0.0]}
     assert demo.model.nq == 7 and list(demo.model.names[1:]) == names
     # the reduced model's torques are the full model's with the fingers held still at the locked pose
@@ -110,7 +111,8 @@ def test_registered_names_and_tables_load(tmp_path, ur5):
     assert table["rate"] == 10.0 and table["fixed_pose"] == {} and TRAINING(table) == table
     assert load_demonstration(table, ur5, tmp_path).rate_hz == pytest.approx(10.0)
     for bad in ({"file": "m.csv", "color": 1}, {"file": "m.csv", "rate": -1}, {"rate": 1}, "no-such-motion",
-                {"file": "m.csv", "fixed_pose": {"a": "x"}}, {"file": "m.csv", "clip_to_limits": 1}):
+                {"file": "m.csv", "fixed_pose": {"a": "x"}}, {"file": "m.csv", "clip_to_limits": 1},
+                {"file": "m.csv", "locked": [1]}, {"file": "m.csv", "locked": "panda_finger_joint1"}):
         with pytest.raises(ValueError, match="must be one of 'human-arm-trial'"):
             TRAINING(bad)
 
@@ -120,7 +122,7 @@ def test_clip_to_limits_clips_and_records_the_amount(tmp_path, panda):
     Q += np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])
     Q[10, 3] = 0.05  # panda_joint4's upper limit is -0.0698
     f = write_csv(tmp_path / "m.csv", [f"panda_joint{i}" for i in range(1, 8)], t, Q)
-    demo = demonstration_from_file(f, panda, clip_to_limits=True)
+    demo = demonstration_from_file(f, panda, clip_to_limits=True, locked=["panda_finger_joint1", "panda_finger_joint2"])
     hi = panda.upperPositionLimit[3]
     assert demo.Q[10, 3] == hi and demo.clipped == {"panda_joint4": pytest.approx(0.05 - hi)}
 
@@ -180,12 +182,12 @@ def test_bad_files_of_every_kind(tmp_path, ur5, panda):
     f = write_csv(tmp_path / "m.csv", UR5_JOINTS, t, Q)
     with pytest.raises(MotionFileError, match="frame range start = 30, stop = 20 is empty"):
         demonstration_from_file(f, ur5, start=30, stop=20)
-    with pytest.raises(MotionFileError, match="fixed_pose names unknown joint 'gripper'"):
+    with pytest.raises(MotionFileError, match="fixed_pose/locked name unknown joint 'gripper'"):
         demonstration_from_file(f, ur5, fixed_pose={"gripper": 0.0})
     g = write_csv(tmp_path / "p.csv", [f"panda_joint{i}" for i in (1, 2, 3, 5, 6, 7)], t, Q + [0, 0, 0, 0, 1.5, 0])
     with pytest.raises(MotionFileError, match="joint 'panda_joint4' is not in the file and its neutral value 0 is "
                                               "outside its limits"):
-        demonstration_from_file(g, panda)
+        demonstration_from_file(g, panda, locked=["panda_joint4", "panda_finger_joint1", "panda_finger_joint2"])
 
 
 def test_too_few_frames_for_the_latent_dimension(tmp_path, ur5):
@@ -225,3 +227,26 @@ def test_times_in_another_unit_are_refused_with_the_likely_cause(tmp_path, ur5, 
     with pytest.raises(MotionFileError, match=f"ms.csv: .* s at .* Hz \\(median step\\).* times look like {unit}"):
         demonstration_from_file(path, ur5)
     assert demonstration_from_file(write_csv(tmp_path / "s.csv", UR5_JOINTS, t, Q), ur5).duration == pytest.approx(t[-1] - t[0])
+
+
+def test_a_joint_without_a_column_must_be_declared(tmp_path, panda, capsys):
+    """A missing column is refused, naming the joint and both ways to hold it; the CLI's --hold
+    declares it (the same reduced model as fixed_pose and locked)."""
+    from latentoc.cli import main
+
+    t, Q = motion(k=7)
+    Q += np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])
+    f = write_csv(tmp_path / "m.csv", [f"panda_joint{i}" for i in range(1, 8)], t, Q)
+    with pytest.raises(MotionFileError, match=r"no column for the robot's joint 'panda_finger_joint2'.*"
+                                              r"fixed_pose = \{ panda_finger_joint2 = value \}.*--hold"):
+        demonstration_from_file(f, panda, fixed_pose={"panda_finger_joint1": 0.03})
+    with pytest.raises(MotionFileError, match="in both fixed_pose and locked"):
+        demonstration_from_file(f, panda, fixed_pose={"panda_finger_joint1": 0.03},
+                                locked=["panda_finger_joint1", "panda_finger_joint2"])
+    out = tmp_path / "o"
+    assert main(["learn", str(f), "--robot", "panda", "--out", str(out)]) == 2
+    assert "panda_finger_joint1', 'panda_finger_joint2'" in capsys.readouterr().err and not out.exists()
+    assert main(["learn", str(f), "--robot", "panda", "--hold", "panda_finger_joint1=0.03", "--hold",
+                 "panda_finger_joint2", "--latent-dim", "2", "--out", str(out)]) == 0
+    summary = json.loads((out / "learn.json").read_text())
+    assert summary["demonstration"]["locked_joints"] == {"panda_finger_joint1": [0.03], "panda_finger_joint2": [0.0]}

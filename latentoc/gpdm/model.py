@@ -90,6 +90,11 @@ class GPDM:
         """Observation noise variance 1/beta3 (in W-scaled units)."""
         return float(1.0 / self.beta[2])
 
+    @property
+    def prior_variance(self) -> float:
+        """beta1 + 1/beta3: sigma^2 (Eq. 19) far from the training points, the largest it can be."""
+        return float(self.beta[0] + 1.0 / self.beta[2])
+
     def learning_summary(self) -> dict[str, float | int | bool]:
         """How learning ended, as solve results report it (``gpdm_*`` keys; :class:`LearningReport`)."""
         r = self.learning

@@ -27,7 +27,7 @@ from ..kind import Solution, joint_range
 from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..spline import BSpline
-from ..tube import TUBE, relative_tube, resolve_tube
+from ..tube import TUBE, relative_tube, tube_delta
 from .base import base_to_freeflyer
 from .contact import POINTS, FootGeometry, foot_points
 from .path import METHODS, joint_range_path, latent_path
@@ -323,7 +323,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     gpdm_time = time.perf_counter() - t0
     path = latent_path(GPLayer(js.gpdm), js.init["P"]) if k is None else \
         joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
-    delta = resolve_tube(problem.tube, js.gpdm.tube_size())
+    delta = tube_delta(problem.tube, js.gpdm)
     s = settings_from_problem(problem, delta)
     robot = js.robot(s.mu)
     t1 = time.perf_counter()

@@ -27,7 +27,7 @@ from ..motions.problem_inputs import problem_demonstration, require_fixed_base
 from ..problem import Problem
 from ..robots import describe_robot
 from ..spline_path import SplinePath
-from ..tube import relative_tube, resolve_tube
+from ..tube import relative_tube, tube_delta
 from .exchange import solve_exchanged
 from .export import Solved, motion_result, time_grid
 from .nlp import MinTorqueNLP, Samples, joint_range_nlp, latent_nlp
@@ -132,7 +132,7 @@ def _check_given_gpdm(gpdm: GPDM, problem: Problem, demo: Demonstration, Q_train
 def _feasible_delta(problem: Problem, gp: GPDM, P0: np.ndarray) -> float:
     """delta of the problem's tube; a SolveError below sigma^2 at the fixed end points."""
     tube_training = gp.tube_size()
-    delta = resolve_tube(problem.tube, tube_training)
+    delta = tube_delta(problem.tube, gp)
     end_s2 = max(float(gp.variance(P0[0])), float(gp.variance(P0[-1])))
     if delta < end_s2:
         raise SolveError(f"tube delta = {delta:.4g} is infeasible: the fixed start/end latent points already have "

@@ -4,14 +4,17 @@ A problem file's ``training`` is a name of :data:`TRAINING_MOTIONS` or a table n
 (:data:`TRAINING`; paths relative to the problem file)::
 
     training = { file = "reach.csv" }
-    training = { file = "reach.npz", rate = 100.0, fixed_pose = { panda_finger_joint1 = 0.02 } }
+    training = { file = "reach.npz", rate = 100.0, fixed_pose = { panda_finger_joint1 = 0.02 },
+                 locked = ["panda_finger_joint2"] }
     training = { file = "01_01.amc", asf = "01.asf", start = 120, stop = 468, fps = 120.0 }
 
 :func:`demonstration_from_file` turns a file (:mod:`.readers`) into a
 :class:`Demonstration`: the samples in the robot's joint order, time from 0 on a uniform grid
 (non-uniform time stamps, or a given ``rate``, resampled by a cubic spline through the samples),
 inside the robot's joint limits (or clipped to them with ``clip_to_limits``), and the robot
-reduced to the joints the file moves, the others locked at ``fixed_pose`` or the model's neutral.
+reduced to the joints the file moves. Every other joint must be declared: held at its
+``fixed_pose`` value or, listed in ``locked``, at the model's neutral value; a joint the file does
+not move and nothing declares is an error (a missing column is a mistake more often than a choice).
 A continuous joint (a URDF's ``continuous``) takes one angle, in rad, with no limits
 (:func:`latentoc.robots.urdf.continuous_as_revolute`).
 Every problem is a :class:`~.readers.MotionFileError` naming the file.
@@ -49,7 +52,7 @@ TRAINING_MOTIONS: dict[str, Callable[[], tuple[np.ndarray, np.ndarray]]] = {
 }
 
 _TABLE_KEYS = {"file": str, "format": str, "asf": str, "fps": float, "start": int, "stop": int, "rate": float,
-               "fixed_pose": dict, "clip_to_limits": bool}
+               "fixed_pose": dict, "locked": list, "clip_to_limits": bool}
 
 
 def _training_table(value: Any) -> str | dict[str, Any]:
@@ -61,7 +64,7 @@ def _training_table(value: Any) -> str | dict[str, Any]:
     if not isinstance(value, dict) or "file" not in value or set(value) - set(_TABLE_KEYS):
         raise ValueError
     out: dict[str, Any] = {"file": None, "format": None, "asf": None, "fps": 120.0, "start": None, "stop": None,
-                           "rate": None, "fixed_pose": {}, "clip_to_limits": False}
+                           "rate": None, "fixed_pose": {}, "locked": [], "clip_to_limits": False}
     for key, v in value.items():
         if v is None and key != "file":  # a normalised table (Problem.from_dict) holds None for "not given"
             continue
@@ -76,7 +79,8 @@ def _training_table(value: Any) -> str | dict[str, Any]:
             or out["format"] not in (None, *FORMATS) \
             or any(out[k] is not None and out[k] < 0 for k in ("start", "stop")) \
             or not all(isinstance(k, str) and isinstance(v, (int, float)) and not isinstance(v, bool)
-                       and np.isfinite(v) for k, v in out["fixed_pose"].items()):
+                       and np.isfinite(v) for k, v in out["fixed_pose"].items()) \
+            or not all(isinstance(k, str) for k in out["locked"]):
         raise ValueError
     out["fixed_pose"] = {k: float(v) for k, v in out["fixed_pose"].items()}
     return out
@@ -85,7 +89,7 @@ def _training_table(value: Any) -> str | dict[str, Any]:
 #: the check of a problem file's ``training``: a registered name or a table naming a file
 TRAINING = Check(_training_table, f"one of {', '.join(map(repr, TRAINING_MOTIONS))}, or a table "
                                   '{ file = "path.csv|npz|amc", rate, fixed_pose = { joint = value }, '
-                                  "clip_to_limits, start, stop, asf, fps, format }")
+                                  'locked = ["joint"], clip_to_limits, start, stop, asf, fps, format }')
 
 
 @dataclass
@@ -206,17 +210,32 @@ def _uniform_time(raw: RawMotion, rate: float | None) -> tuple[np.ndarray, np.nd
     return grid, values, (n - 1) / span, True
 
 
-def _reduced(model: pin.Model, names: list[str], fixed_pose: dict[str, float], path: Path
+def _reduced(model: pin.Model, names: list[str], fixed_pose: dict[str, float], held: list[str], path: Path
              ) -> tuple[pin.Model, dict[str, list[float]]]:
-    """The model with every joint not in ``names`` locked at ``fixed_pose`` or its neutral value."""
+    """The model with every joint not in ``names`` locked: at ``fixed_pose`` or, listed in ``held``,
+    at its neutral value; a joint in none of them is an error."""
     joints = {model.names[j]: j for j in range(1, model.njoints)}
-    unknown = [n for n in fixed_pose if n not in joints]
+    declared = [*fixed_pose, *held]
+    unknown = [n for n in declared if n not in joints]
     if unknown:
-        raise MotionFileError(f"{path}: fixed_pose names unknown joint{'s' if len(unknown) > 1 else ''} "
+        raise MotionFileError(f"{path}: fixed_pose/locked name unknown joint{'s' if len(unknown) > 1 else ''} "
                               f"{', '.join(map(repr, unknown))}; the robot {model.name!r} has {', '.join(joints)}")
-    moved = [n for n in fixed_pose if n in names]
+    moved = [n for n in declared if n in names]
     if moved:
-        raise MotionFileError(f"{path}: fixed_pose gives {', '.join(map(repr, moved))}, which the file moves")
+        raise MotionFileError(f"{path}: fixed_pose/locked give {', '.join(map(repr, moved))}, which the file moves")
+    twice = sorted(set(fixed_pose) & set(held))
+    if twice:
+        raise MotionFileError(f"{path}: {', '.join(map(repr, twice))} in both fixed_pose and locked; give each once")
+    undeclared = [n for n in joints if n not in names and n not in declared
+                  and model.joints[joints[n]].shortname() != "JointModelFreeFlyer"]
+    if undeclared:
+        many = len(undeclared) > 1
+        raise MotionFileError(
+            f"{path}: no column for the robot's joint{'s' if many else ''} {', '.join(map(repr, undeclared))} "
+            f"(the file moves {', '.join(names)}); if {'they are' if many else 'it is'} meant to be held still, say "
+            f"so: in the problem file's training table, fixed_pose = {{ {undeclared[0]} = value }} or locked = "
+            f"[{', '.join(map(repr, undeclared))}] (at the model's neutral value); for `learn`, "
+            f"--hold {undeclared[0]}[=value]")
     q_ref = pin.neutral(model)
     locked: dict[str, list[float]] = {}
     for name, j in joints.items():
@@ -246,9 +265,10 @@ def _reduced(model: pin.Model, names: list[str], fixed_pose: dict[str, float], p
 def demonstration_from_file(path: str | Path, model: pin.Model, *, fmt: str | None = None, asf: str | Path | None = None,
                             fps: float = 120.0, start: int | None = None, stop: int | None = None,
                             rate: float | None = None, fixed_pose: dict[str, float] | None = None,
-                            clip_to_limits: bool = False) -> Demonstration:
+                            locked: list[str] | None = None, clip_to_limits: bool = False) -> Demonstration:
     """The motion in the file ``path`` on the robot ``model`` (module doc); ``start``, ``stop``:
-    the samples start .. stop - 1 (0-based, in file order)."""
+    the samples start .. stop - 1 (0-based, in file order); ``fixed_pose`` and ``locked`` declare the
+    joints the file does not move (held at the given values, or at the model's neutral)."""
     path = Path(path)
     model = continuous_as_revolute(model)  # one angle per continuous joint, unbounded
     raw = read_raw_motion(path, model, fmt, None if asf is None else Path(asf), fps)
@@ -274,8 +294,8 @@ def demonstration_from_file(path: str | Path, model: pin.Model, *, fmt: str | No
         over = np.max(np.maximum(lo - Q, Q - hi), axis=0)
         clipped.update({n: max(clipped.get(n, 0.0), float(v)) for n, v in zip(names, over) if v > 0})
         Q = np.clip(Q, lo, hi)
-    reduced, locked = _reduced(model, names, fixed_pose or {}, path)
-    return Demonstration(t=t, Q=Q, joint_names=names, model=reduced, source=str(path), locked=locked,
+    reduced, held = _reduced(model, names, fixed_pose or {}, list(locked or []), path)
+    return Demonstration(t=t, Q=Q, joint_names=names, model=reduced, source=str(path), locked=held,
                          rate_hz=float(rate_hz), resampled=resampled, clipped=clipped)
 
 
@@ -291,7 +311,8 @@ def load_demonstration(setting: str | dict[str, Any], model: pin.Model, base_dir
     return demonstration_from_file(base / setting["file"], model, fmt=setting["format"],
                                    asf=None if setting["asf"] is None else base / setting["asf"], fps=setting["fps"],
                                    start=setting["start"], stop=setting["stop"], rate=setting["rate"],
-                                   fixed_pose=setting["fixed_pose"], clip_to_limits=setting["clip_to_limits"])
+                                   fixed_pose=setting["fixed_pose"], locked=setting["locked"],
+                                   clip_to_limits=setting["clip_to_limits"])
 
 
 def check_frames(demo: Demonstration, latent_dim: int, stride: int = 1) -> None:

@@ -22,6 +22,9 @@ tangents would dominate them); it takes the same inputs.
 
 Their size depends on the robot and the row definition, not on the GPDM: they are cached on
 disk keyed by the serialized rows and d, so a new GPDM, tube, motion or node count reuses them.
+Common subexpressions are eliminated (``ca.cse``) only before C is generated, where gcc's time and
+the hot code shrink with them; in the virtual machine (no JIT) it would cost 3-4x the build for
+~30 % quicker evaluations (docs/derivatives.md).
 """
 from __future__ import annotations
 
@@ -101,8 +104,9 @@ class RobotBlock:
     def n_local(self) -> int:
         return 3 * self.latent_dim + self.n_extra
 
-    def derivative_functions(self, pieces: tuple[str, ...] = PIECES) -> dict[str, ca.Function]:
-        """The SX Functions ``rows``, ``jac`` and ``hess`` (module doc), or those of ``pieces``."""
+    def derivative_functions(self, pieces: tuple[str, ...] = PIECES, cse: bool = True) -> dict[str, ca.Function]:
+        """The SX Functions ``rows``, ``jac`` and ``hess`` (module doc), or those of ``pieces``;
+        ``cse``: with common subexpressions eliminated."""
         D, d, nr, name = self.output_dim, self.latent_dim, self.n_extra, self.name
         if self.identity and D != d:
             raise ValueError(f"block {name}: an identity block needs d = D, got d = {d}, D = {D}")
@@ -113,26 +117,27 @@ class RobotBlock:
         sx, sv, sa, sr = s[:d], s[d:2 * d], s[2 * d:3 * d], s[3 * d:]
         lin = (y + T[0] @ sx, yd + T[1] @ sx + T[0] @ sv, ydd + T[2] @ sx + 2 * T[1] @ sv + T[0] @ sa, r + sr)
         zero = ca.DM.zeros(s.shape)
+        shared = ca.cse if cse else (lambda e: e)
         F = self.rows_sx(y, yd, ydd, r)
         ins, names = [y, yd, ydd, r], ["y", "yd", "ydd", "r"]
         out = {}
         if "rows" in pieces:
-            out["rows"] = ca.Function(name, ins, [ca.cse(F)], names, ["F"])
+            out["rows"] = ca.Function(name, ins, [shared(F)], names, ["F"])
         if "jac" in pieces:
             J = ca.substitute(ca.jacobian(self.rows_sx(*lin), s), s, zero)
-            out["jac"] = ca.Function(f"{name}_jac", ins + G, ca.cse([F, J]), names + ["G0", "G1", "G2"], ["F", "J"])
+            out["jac"] = ca.Function(f"{name}_jac", ins + G, shared([F, J]), names + ["G0", "G1", "G2"], ["F", "J"])
         if "hess" in pieces:
             lam = ca.SX.sym("l", self.n_out)
             H = ca.substitute(ca.hessian(ca.dot(lam, self.rows_sx(*lin)), s)[0], s, zero)
             mu = ca.gradient(ca.dot(lam, F), ca.vertcat(y, yd, ydd))
-            out["hess"] = ca.Function(f"{name}_hess", ins + G + [lam], ca.cse([H, mu]),
+            out["hess"] = ca.Function(f"{name}_hess", ins + G + [lam], shared([H, mu]),
                                       names + ["G0", "G1", "G2", "l"], ["H", "mu"])
         return out
 
     def function(self, which: str) -> ca.Function:
         """Piece ``which``: compiled, or (without JIT) its SX Function, built when first asked for."""
         if which not in self.functions:
-            self.functions.update(self.derivative_functions((which,)))
+            self.functions.update(self.derivative_functions((which,), cse=False))
         return self.functions[which]
 
     def mapped(self, which: str, K: int) -> "MappedCall":
