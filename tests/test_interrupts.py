@@ -13,6 +13,7 @@ from fake_solver import install, solution
 
 import latentoc
 from latentoc.cli import main
+from latentoc.robots import load_robot
 
 pytestmark = pytest.mark.usefixtures("sigint_default")
 
@@ -97,7 +98,8 @@ def test_learn_interrupted_exits_130_and_writes_nothing(tmp_path, capsys, monkey
     csv = tmp_path / "m.csv"
     csv.write_text("t,lhumerus_rz,lhumerus_ry\n" + "".join(f"{i / 10},{0.01 * i},{-0.01 * i}\n" for i in range(8)))
     out = tmp_path / "o"
-    assert main(["learn", str(csv), "--robot", "human-arm", "--latent-dim", "1", "--out", str(out)]) == 130
+    held = [a for name in load_robot("human-arm").names[2:] if name != "lhumerus_ry" for a in ("--hold", name)]
+    assert main(["learn", str(csv), "--robot", "human-arm", "--latent-dim", "1", "--out", str(out), *held]) == 130
     assert "latentoc: interrupted" in capsys.readouterr().err and not out.exists()
 
 

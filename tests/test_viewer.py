@@ -246,7 +246,7 @@ def test_the_page_draws_the_robot_and_animates_in_a_browser(pages, name, tmp_pat
     page, empty = pages[name][""], pages[name]["-empty"]
     # playing: the clock has moved on. Virtual time is not exact and the motion loops back to t = 0,
     # so the played time, which never wraps, is checked
-    html = dom(page, 1300)
+    html = dom(page, 400)
     assert "data-error" not in html, "the script failed"
     assert re.search(r'<div id="status"></div>', html)  # "loading..." cleared at the end of the script
     assert int(re.search(r'data-ticks="([0-9]+)"', html).group(1)) >= 2, "only one frame was drawn"

@@ -257,7 +257,15 @@
       length: r(contacts.lengths[k]) }));
   }
 
+  // paused, the page draws again only after an input (orbit, slider, check boxes, resize): no redraws of a still
+  let dirty = true;
+  for (const ev of ["pointerdown", "pointermove", "wheel", "input", "change", "click", "keydown", "resize"]) {
+    window.addEventListener(ev, () => { dirty = true; }, { capture: true, passive: true });
+  }
+
   function loop(now) {
+    if (!clock.playing && !dirty) { clock.wall = now; requestAnimationFrame(loop); return; }
+    dirty = false;
     if (clock.playing) {
       const step = (now - clock.wall) / 1000 * parseFloat(controls.speed.value);
       clock.t += step;
