@@ -57,7 +57,8 @@ def _gp_motion(js, t: np.ndarray) -> np.ndarray:
     return js.gpdm.mean(x)
 
 
-def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight: float = PLANT_WEIGHT) -> dict:
+def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight: float = PLANT_WEIGHT,
+                 acc_weight: float = ACC_WEIGHT) -> dict:
     """The least-squares planted stance (module doc) and what it measures."""
     model, tr, ph, geom = js.model, js.training, js.phases, js.geom
     E, leg = joint_embedding(js.smap), _left_leg(model, js.smap)
@@ -72,7 +73,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
     Br = BSpline(n_res, ph.takeoff).basis(t) if n_res > 0 else np.zeros((len(t), 0))
     Bb2 = sb.basis(t, 2)
     Br2 = BSpline(n_res, ph.takeoff).basis(t, 2) if n_res > 0 else np.zeros((len(t), 0))
-    smooth = ACC_WEIGHT * np.block([[np.kron(np.eye(3), Bb2), np.zeros((3 * len(t), n_res * len(leg)))],
+    smooth = acc_weight * np.block([[np.kron(np.eye(3), Bb2), np.zeros((3 * len(t), n_res * len(leg)))],
                                     [np.zeros((len(leg) * len(t), 3 * n_base)), np.kron(np.eye(len(leg)), Br2)]])
     Pr = np.zeros((n_res, len(leg)))
     stretches = [(k, name) for k, name in enumerate(POINTS)]
@@ -182,6 +183,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--base", type=int, nargs="*", default=[12, 24], help="base control points")
     parser.add_argument("--plant-weight", type=float, nargs="*", default=[PLANT_WEIGHT],
                         help="weights per m of planting error (against 100 per rad or m of change)")
+    parser.add_argument("--acc-weight", type=float, default=ACC_WEIGHT,
+                        help="weight per rad/s^2 or m/s^2 of changed acceleration, per sample")
     args = parser.parse_args(argv)
     js = setup()
     print(f"{'weight':>8}{'base':>5}{'res':>5}{'planting mm':>13}{'max residual deg':>18}{'torque excess N m':>19}"
@@ -192,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{100 * tq['share_over']:>13.0f}%")
     for w, nb, nr in ((w, nb, nr) for w in args.plant_weight for nb in args.base for nr in args.res):
             t0 = time.perf_counter()
-            fit = plant_stance(js, nb, nr, plant_weight=w)
+            fit = plant_stance(js, nb, nr, plant_weight=w, acc_weight=args.acc_weight)
             tq = fit["torques"]
             print(f"{w:>8.0e}{nb:>5}{nr:>5}{fit['planting_mm']:>13.3f}{float(np.max(fit['residual_deg'])):>18.2f}"
                   f"{tq['excess_Nm']:>19.1f}{tq['joint']:>14}{100 * tq['share_over']:>13.0f}%"
