@@ -19,22 +19,23 @@ Run: ``python -m latentoc bench planting [--res 0 8 16 32] [--base 12 24]``.
 from __future__ import annotations
 
 import argparse
+import itertools
 import time
 
 import numpy as np
 import pinocchio as pin
-from scipy.optimize import nnls
 
 from ..jump.base import base_to_freeflyer
-from ..jump.contact import FRAMES, POINTS, foot_points, generator_columns, joint_embedding, point_jacobians
+from ..jump.contact import FRAMES, POINTS, foot_points, joint_embedding
 from ..jump.problem import setup
+from ..jump.torque_limits import contact_torques
 from ..jump.training import TOE
+from ..latent.gp_layer import GPLayer
 from ..spline import BSpline
 
 RATE = 1000.0
 PLANT_WEIGHT = 1e3  # per m of planting error, per point and 1 kHz sample
 CHANGE_WEIGHT = 1e2  # per rad of residual and per m or rad of base change, per control point
-EPS = 1e-4  # s, central differences of the GP mean in time
 ACC_WEIGHT = 1e-1  # per m/s^2 or rad/s^2 of changed base and leg acceleration, per 1 kHz sample
 
 
@@ -50,11 +51,13 @@ def _left_leg(model: pin.Model, smap) -> np.ndarray:
     return np.array([k for k, q in enumerate(smap.learned_q) if int(q) in q_idx], int)
 
 
-def _gp_motion(js, t: np.ndarray) -> np.ndarray:
-    """The GP mean's learned coordinates along the start latent path at times t."""
+def _gp_motion(js, t: np.ndarray) -> list[np.ndarray]:
+    """The GP mean's learned coordinates and their first two time derivatives (Eq. 18, 26-28)
+    along the start latent path at times t."""
     P = js.init["P"]
-    x = BSpline(P.shape[0], js.training.duration).evaluate(P, t, 0)
-    return js.gpdm.mean(x)
+    sp = BSpline(P.shape[0], js.training.duration)
+    m = GPLayer(js.gpdm).motion(np.hstack([sp.evaluate(P, t, k) for k in range(3)]))
+    return [m.y, m.yd, m.ydd]
 
 
 def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight: float = PLANT_WEIGHT,
@@ -80,7 +83,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
     d = model.createData()
 
     def configurations(Pb, Pr):
-        Y = Y_mu.copy()
+        Y = Y_mu[0].copy()
         Y[:, leg] += Br @ Pr
         return np.column_stack([base_to_freeflyer(Bb @ Pb)[0], Y @ E.T])
 
@@ -143,33 +146,26 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
     residual = np.degrees(np.max(np.abs(Br @ Pr), axis=0)) if n_res else np.zeros(len(leg))
     return {"Q": Q, "t": t, "loaded": loaded, "planting_mm": 1e3 * err, "residual_deg": residual,
             "leg": leg, "Pb": Pb, "Pr": Pr,
-            "torques": _torques(js, t, Bb, Pb, Br, Pr, leg, E, loaded)}
+            "torques": _torques(js, t, Y_mu, Pb, Pr, leg, loaded)}
 
 
-def _torques(js, t, Bb, Pb, Br, Pr, leg, E, loaded) -> dict:
-    """Inverse dynamics of the fitted stance with NNLS point forces on the loaded points."""
-    model, geom = js.model, js.geom
+def _torques(js, t: np.ndarray, Y_mu: list[np.ndarray], Pb: np.ndarray, Pr: np.ndarray, leg: np.ndarray,
+             loaded: dict[str, np.ndarray]) -> dict:
+    """Inverse dynamics of the fitted stance with NNLS point forces on the loaded points
+    (:func:`latentoc.jump.torque_limits.contact_torques`) against Eq. 34's limits."""
+    model = js.model
     sb = BSpline(Pb.shape[0], js.phases.takeoff)
-    base = [sb.evaluate(Pb, t, k) for k in range(3)]
-    tc = np.clip(t, EPS, None)  # the differences stay inside the spline's interval
-    Ym = [_gp_motion(js, t), (_gp_motion(js, tc + EPS) - _gp_motion(js, tc - EPS)) / (2 * EPS),
-          (_gp_motion(js, tc + EPS) - 2 * _gp_motion(js, tc) + _gp_motion(js, tc - EPS)) / EPS ** 2]
+    Ym = [y.copy() for y in Y_mu]
     if Pr.size:
         sr = BSpline(Pr.shape[0], js.phases.takeoff)
         for k in range(3):
             Ym[k][:, leg] += sr.evaluate(Pr, t, k)
-    q7, v6, a6 = base_to_freeflyer(*base)
-    Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in zip((q7, v6, a6), Ym))
-    d = model.createData()
+    E = joint_embedding(js.smap)
+    base = base_to_freeflyer(*(sb.evaluate(Pb, t, k) for k in range(3)))
+    Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in zip(base, Ym))
+    taus = contact_torques(model, js.geom, Q, V, A, np.ones(len(t), bool),
+                           np.column_stack([loaded[name] for name in POINTS]))[0]
     lim = js.limits
-    taus = np.zeros((len(t), model.nv - 6))
-    for i in range(len(t)):
-        tau = pin.rnea(model, d, Q[i], V[i], A[i])
-        Acols = generator_columns(point_jacobians(model, d, Q[i], geom))
-        cols = np.repeat([loaded[name][i] for name in POINTS], 2)
-        lam = np.zeros(2 * len(POINTS))
-        lam[cols] = nnls(Acols[[0, 2, 4]][:, cols], tau[[0, 2, 4]])[0]
-        taus[i] = tau[6:] - (Acols @ lam)[6:]
     excess = np.maximum(taus - lim.tau_max, lim.tau_min - taus)
     worst = int(np.argmax(excess.max(axis=0)))
     return {"excess_Nm": float(excess.max()), "joint": model.names[int(np.searchsorted(
@@ -193,11 +189,11 @@ def main(argv: list[str] | None = None) -> int:
     tq = start["torques"]
     print(f"{'start':>8}{'':>10}{start['planting_mm']:>13.3f}{0.0:>18.2f}{tq['excess_Nm']:>19.1f}{tq['joint']:>14}"
           f"{100 * tq['share_over']:>13.0f}%")
-    for w, nb, nr in ((w, nb, nr) for w in args.plant_weight for nb in args.base for nr in args.res):
-            t0 = time.perf_counter()
-            fit = plant_stance(js, nb, nr, plant_weight=w, acc_weight=args.acc_weight)
-            tq = fit["torques"]
-            print(f"{w:>8.0e}{nb:>5}{nr:>5}{fit['planting_mm']:>13.3f}{float(np.max(fit['residual_deg'])):>18.2f}"
-                  f"{tq['excess_Nm']:>19.1f}{tq['joint']:>14}{100 * tq['share_over']:>13.0f}%"
-                  f"{time.perf_counter() - t0:>8.1f}", flush=True)
+    for w, nb, nr in itertools.product(args.plant_weight, args.base, args.res):
+        t0 = time.perf_counter()
+        fit = plant_stance(js, nb, nr, plant_weight=w, acc_weight=args.acc_weight)
+        tq = fit["torques"]
+        print(f"{w:>8.0e}{nb:>5}{nr:>5}{fit['planting_mm']:>13.3f}{float(np.max(fit['residual_deg'])):>18.2f}"
+              f"{tq['excess_Nm']:>19.1f}{tq['joint']:>14}{100 * tq['share_over']:>13.0f}%"
+              f"{time.perf_counter() - t0:>8.1f}", flush=True)
     return 0

@@ -49,20 +49,15 @@ def smoothed_motion(tr: JumpTraining, E: np.ndarray, n_control: int = 40):
             np.column_stack([a6, Zdd[:, 3:] @ E.T]))
 
 
-def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: FootGeometry,
-                               in_contact: np.ndarray, mu: float = MU, margin: float = 0.1,
-                               n_control: int = 40, loaded: np.ndarray | None = None,
-                               floor: float = 0.0) -> TrainingDynamics:
-    """Least-squares (NNLS) contact forces and joint torques of the training motion.
-
-    ``loaded`` (n frames x 4: heel, ball, toe, pad) marks the points that may push; default all.
-    Each loaded joint's range is widened by ``max(margin * peak, floor)`` on both sides."""
-    E = joint_embedding(smap)
-    Q, V, A = smoothed_motion(tr, E, n_control)
+def contact_torques(model: pin.Model, geom: FootGeometry, Q: np.ndarray, V: np.ndarray, A: np.ndarray,
+                    in_contact: np.ndarray, loaded: np.ndarray | None = None, mu: float = MU
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Joint torques (n, nv - 6), point forces (n, 4, 2) and base residual (n, 6) of the motion Q, V, A
+    with NNLS contact forces (module doc) on the frames ``in_contact``: on the points ``loaded`` marks
+    (n frames x 4: heel, ball, toe, pad; default all)."""
     d = model.createData()
     G = generator_matrix(mu)
-    n = len(Q)
-    npt = len(POINTS)
+    n, npt = len(Q), len(POINTS)
     taus, forces, res = np.zeros((n, model.nv - 6)), np.zeros((n, npt, 2)), np.zeros((n, 6))
     for i in range(n):
         tau = pin.rnea(model, d, Q[i], V[i], A[i])
@@ -78,6 +73,19 @@ def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: F
             gf = np.zeros(model.nv)
         res[i] = tau[:6] - gf[:6]
         taus[i] = tau[6:] - gf[6:]
+    return taus, forces, res
+
+
+def estimate_training_dynamics(model: pin.Model, smap, tr: JumpTraining, geom: FootGeometry,
+                               in_contact: np.ndarray, mu: float = MU, margin: float = 0.1,
+                               n_control: int = 40, loaded: np.ndarray | None = None,
+                               floor: float = 0.0) -> TrainingDynamics:
+    """Least-squares (NNLS) contact forces and joint torques of the training motion.
+
+    ``loaded`` (n frames x 4: heel, ball, toe, pad) marks the points that may push; default all.
+    Each loaded joint's range is widened by ``max(margin * peak, floor)`` on both sides."""
+    Q, V, A = smoothed_motion(tr, joint_embedding(smap), n_control)
+    taus, forces, res = contact_torques(model, geom, Q, V, A, in_contact, loaded, mu)
     peak = np.max(np.abs(taus), axis=0)
     pad = np.where(peak > 1e-9, np.maximum(margin * peak, floor), 0.0)  # unloaded (mirrored) joints stay 0
     return TrainingDynamics(tr.t, taus, forces, res, taus.min(0) - pad, taus.max(0) + pad)
