@@ -75,10 +75,10 @@ def tube_delta(spec: float | str, gpdm: GPDM) -> float:
     """delta of a tube spec for ``gpdm`` (:func:`resolve_tube` against its Eq. 30 tube); a
     :class:`ProblemError` for an absolute delta at or above :attr:`GPDM.prior_variance`, the
     largest sigma^2 anywhere: such a tube bounds nothing, and is mostly a "5x" written as "5"."""
-    training = gpdm.tube_size()
-    delta = resolve_tube(spec, training)
+    delta = resolve_tube(spec, gpdm.tube_size)  # the Eq. 30 tube computed only for "<k>x"
     ceiling = gpdm.prior_variance
-    if not parse_tube(spec)[1] and delta >= ceiling:
+    if delta >= ceiling and not parse_tube(spec)[1]:
+        training = gpdm.tube_size()
         raise ProblemError(
             f"tube delta = {delta:.4g} is at or above {ceiling:.4g}, the largest sigma^2 (Eq. 19) this "
             f"GPDM gives anywhere, so it would bound nothing; \"{delta:g}x\" is {delta:g} times the training "
