@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["watching", "interrupts_seen"]
+__all__ = ["watching", "deferred", "interrupts_seen"]
 
 _seen = 0  # SIGINTs received by the handler of this module
 
@@ -30,6 +30,11 @@ def _record(signum: int, frame: FrameType | None) -> None:
     global _seen
     _seen += 1
     raise KeyboardInterrupt
+
+
+def _count(signum: int, frame: FrameType | None) -> None:
+    global _seen
+    _seen += 1
 
 
 @contextmanager
@@ -46,6 +51,31 @@ def watching() -> Iterator[None]:
     try:
         yield
     except Exception as exc:  # an error a SIGINT caused inside C code (CasADi: a SystemError)
+        if _seen > start:
+            raise KeyboardInterrupt from exc
+        raise
+    finally:
+        if install:
+            signal.signal(signal.SIGINT, previous)
+    if _seen > start:
+        raise KeyboardInterrupt
+
+
+@contextmanager
+def deferred() -> Iterator[None]:
+    """Run the block with SIGINT counted but not raised (:func:`interrupts_seen` grows), so that no
+    KeyboardInterrupt starts inside C code that calls back into Python (Ipopt's callbacks check the
+    count and stop the solver instead); KeyboardInterrupt at the block's end if one arrived. Only in
+    the main thread, and only over Python's default handler or :func:`watching`'s."""
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGINT) if main else None
+    install = previous is signal.default_int_handler or previous is _record
+    start = _seen
+    if install:
+        signal.signal(signal.SIGINT, _count)
+    try:
+        yield
+    except Exception as exc:
         if _seen > start:
             raise KeyboardInterrupt from exc
         raise

@@ -135,17 +135,19 @@ def _interrupting(nlp, after: int):
 
 
 @pytest.mark.usefixtures("sigint_default")
-def test_ctrl_c_inside_ipopt_raises_instead_of_a_result(monkeypatch, tmp_path):
+def test_ctrl_c_inside_ipopt_raises_instead_of_a_result(monkeypatch, tmp_path, capfd):
     """CasADi turns an exception inside a callback into the status NonIpopt_Exception_Thrown and
-    returns a point; the solve must raise KeyboardInterrupt instead, and stop at once."""
+    returns a point; the solve must raise KeyboardInterrupt instead, stop at once, and print no
+    traceback from inside CasADi."""
     nlp, bounds, _, _ = _circle(monkeypatch, tmp_path)
     calls = _interrupting(nlp, after=2)
     with pytest.raises(KeyboardInterrupt):
         ipopt.solve(nlp, np.zeros(N), **bounds)
     assert calls["n"] == 2  # no iteration after the interrupt
+    assert "Traceback" not in capfd.readouterr().err
 
 
-def test_a_failing_callback_raises_its_error(monkeypatch, tmp_path):
+def test_a_failing_callback_raises_its_error(monkeypatch, tmp_path, capfd):
     nlp, bounds, _, _ = _circle(monkeypatch, tmp_path)
 
     def broken(w):
@@ -154,6 +156,7 @@ def test_a_failing_callback_raises_its_error(monkeypatch, tmp_path):
     nlp.constraints = broken
     with pytest.raises(ZeroDivisionError, match="in the constraints"):
         ipopt.solve(nlp, np.zeros(N), **bounds)
+    assert "Traceback" not in capfd.readouterr().err  # raised once, by the solve, not printed by CasADi
 
 
 def test_history_is_ipopts_log():

@@ -16,6 +16,7 @@ from typing import Any, Callable
 import casadi as ca
 import numpy as np
 
+from ..interrupts import deferred, interrupts_seen
 from ..progress import bar
 from ..threads import openblas_threads_at_load
 from .assemble import SparseNLP
@@ -67,15 +68,23 @@ def load_ipopt() -> None:
 
 
 class _Raised:
-    """The first exception raised inside a callback (Ctrl-C included): CasADi would report it as
-    the solver status NonIpopt_Exception_Thrown, so :func:`solve` raises it again afterwards."""
+    """The first exception raised inside a callback, or a Ctrl-C during the solve: the callbacks
+    record it and return a failure (an exception let through into CasADi would be printed with its
+    traceback), the progress callback then stops Ipopt, and :func:`solve` raises it afterwards."""
 
     def __init__(self) -> None:
         self.error: BaseException | None = None
+        self._interrupts = interrupts_seen()
 
     def record(self, exc: BaseException) -> None:
         if self.error is None:
             self.error = exc
+
+    def stopped(self) -> bool:
+        """Whether the solve must stop: an error was recorded or a SIGINT arrived."""
+        if self.error is None and interrupts_seen() > self._interrupts:
+            self.record(KeyboardInterrupt())
+        return self.error is not None
 
 
 class _Callback(ca.Callback):
@@ -121,6 +130,8 @@ class _Callback(ca.Callback):
 
     def eval_buffer(self, args, res):
         t0 = time.perf_counter()
+        if self._raised.stopped():
+            return 1
         try:
             # a missing input is zero; a missing output was not asked for
             out = self._fn(*[np.zeros(sp.nnz()) if a is None else np.frombuffer(a, dtype=np.float64)
@@ -130,7 +141,7 @@ class _Callback(ca.Callback):
                     np.frombuffer(r, dtype=np.float64)[:] = np.ravel(v)
         except BaseException as exc:
             self._raised.record(exc)
-            raise
+            return 1
         self._timings[self.name()] = self._timings.get(self.name(), 0.0) + time.perf_counter() - t0
         self._calls[self.name()] = self._calls.get(self.name(), 0) + 1
         return 0
@@ -168,6 +179,8 @@ class _Progress(ca.Callback):
         return ca.Sparsity.dense(0)
 
     def eval(self, args):
+        if self.raised.stopped():
+            return [1]  # non-zero: Ipopt stops
         try:
             g = np.asarray(args[ca.nlpsol_out().index("g")]).ravel()
             viol = float(np.max(np.concatenate([[0.0], self.lbg - g, g - self.ubg]))) if g.size else 0.0
@@ -225,9 +238,13 @@ def solve(nlp: SparseNLP, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg:
     if warm is not None:
         args.update({"lam_g0": warm["lam_g0"], "lam_x0": warm["lam_x0"]})
     try:
-        sol = solver(**args)
-    except KeyboardInterrupt as exc:  # between callbacks, in CasADi's own code
+        with deferred():  # a Ctrl-C is counted; the next callback stops Ipopt
+            sol = solver(**args)
+    except KeyboardInterrupt as exc:
         raised.record(exc)
+    except Exception:  # CasADi's report of a failed callback: the callback's own error is raised below
+        if raised.error is None:
+            raise
     finally:
         progress.bar.close()
     if raised.error is not None:  # Ctrl-C or a failing callback: never a result
