@@ -195,16 +195,29 @@ def _simulate_arguments(sub: Any) -> None:
     sm.add_argument("--quiet", action="store_true", help="no progress display")
 
 
+def _retarget_arguments(sub: Any) -> None:
+    """The ``retarget`` command's arguments."""
+    rt = sub.add_parser("retarget", help="a motion of one model followed by another robot (keypoint IK): an .npz")
+    rt.add_argument("map", type=Path, help="the keypoint map, a TOML file (e.g. robots/g1/cmu-retarget.toml)")
+    rt.add_argument("--motion", type=Path, required=True,
+                    help="the source motion: .amc (with --asf) or .npz (t, q: the source model's configurations)")
+    rt.add_argument("--asf", type=Path, default=None, help="the ASF skeleton of an .amc motion")
+    rt.add_argument("--fps", type=_positive, default=120.0, help="frame rate of an .amc motion (default 120)")
+    rt.add_argument("--start", type=int, default=None, help="first frame (0-based)")
+    rt.add_argument("--stop", type=int, default=None, help="one past the last frame")
+    rt.add_argument("--out", type=Path, required=True, help="the target's motion, an .npz (t, q, retarget)")
+
+
 _ARGUMENTS = (_solve_arguments, _learn_arguments, _plot_arguments, _view_arguments, _notebooks_arguments,
               _list_arguments, _sweep_arguments, _start_poses_arguments, _reproduce_arguments, _bench_arguments,
-              _simulate_arguments)
+              _simulate_arguments, _retarget_arguments)
 
 #: command name -> its implementation (:mod:`latentoc.commands`)
 COMMANDS = {"plot": commands.cmd_plot, "view": commands.cmd_view, "notebooks": commands.cmd_notebooks,
             "list": commands.cmd_list, "show": commands.cmd_show, "learn": commands.cmd_learn,
             "solve": commands.cmd_solve, "sweep": commands.cmd_sweep, "reproduce": commands.cmd_reproduce,
             "start-poses": commands.cmd_start_poses, "bench": commands.cmd_bench,
-            "simulate": simulate.cmd_simulate}
+            "simulate": simulate.cmd_simulate, "retarget": commands.cmd_retarget}
 
 
 def _parser() -> argparse.ArgumentParser:

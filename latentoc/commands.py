@@ -17,7 +17,7 @@ from .files import check_out_dir
 from .results import Result
 
 __all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
-           "cmd_show", "cmd_solve", "cmd_sweep", "cmd_start_poses", "cmd_reproduce", "cmd_bench"]
+           "cmd_show", "cmd_solve", "cmd_sweep", "cmd_start_poses", "cmd_reproduce", "cmd_bench", "cmd_retarget"]
 
 
 def tube_arg(text: str) -> float | str:
@@ -322,3 +322,67 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if name not in benchmarks:
         raise LatentocError(f"unknown benchmark {args.name!r}; known: {', '.join(benchmarks)}")
     return int(benchmarks[name](args.rest) or 0)
+
+
+def _source_motion(args: argparse.Namespace, model: Any) -> tuple[Any, Any]:
+    """Times and full configurations of the source model from ``--motion`` (an AMC with its ASF, or an
+    NPZ whose q is the model's configuration), cut to ``--start``/``--stop``."""
+    import numpy as np
+
+    from .mocap import motion_to_q, read_amc, read_asf
+    from .motions.readers import MotionFileError, read_npz
+
+    path = Path(args.motion)
+    if not path.is_file():
+        raise MotionFileError(f"--motion: {path} does not exist")
+    if path.suffix.lower() == ".amc":
+        if args.asf is None or not Path(args.asf).is_file():
+            raise MotionFileError(f"--asf: an AMC motion needs its ASF skeleton (got {args.asf})")
+        skeleton = read_asf(args.asf)
+        Q = motion_to_q(model, skeleton, read_amc(path, skeleton, args.fps))
+        t = np.arange(len(Q)) / args.fps
+    else:
+        raw = read_npz(path)
+        if raw.names is not None or raw.values.shape[1] != model.nq:
+            raise MotionFileError(f"--motion: {path}'s q must be the source model's configuration "
+                                  f"({model.nq} columns, no joint_names), got {raw.values.shape[1]} columns")
+        t, Q = raw.t, raw.values
+    stop = len(Q) if args.stop is None else args.stop
+    if not (0 <= (args.start or 0) < stop <= len(Q)) or stop - (args.start or 0) < 2:
+        raise MotionFileError(f"--start/--stop: {args.start}:{args.stop} is not a window of two or more of the "
+                              f"motion's {len(Q)} frames")
+    sl = slice(args.start or 0, stop)
+    return t[sl] - t[sl][0], Q[sl]
+
+
+def cmd_retarget(args: argparse.Namespace) -> int:
+    """Retarget ``--motion`` with the keypoint map MAP; write the target's motion as an NPZ
+    (``t``, ``q``: the target's configurations, ``retarget``: the report as JSON)."""
+    import numpy as np
+    import pinocchio as pin
+
+    from .files import atomic_write, dumps_json
+    from .motions.retarget_map import load_retarget_map
+    from .motions.retargeting import chain_scale, retarget
+    from .robots.catalog import load_robot
+
+    if Path(args.out).suffix != ".npz":
+        raise LatentocError(f"--out: the retargeted motion is an .npz file, got {args.out}")
+    check_out_dir(Path(args.out).parent or Path("."))
+    spec = load_retarget_map(args.map)
+    source, target = load_robot(spec.source), load_robot(spec.target)
+    t, Q = _source_motion(args, source)
+    chain = [k for n in spec.scale_chain for k in spec.keypoints if k.name == n]
+    scale = spec.scale if spec.scale is not None else chain_scale(source, Q[0], target, pin.neutral(target), chain)
+    r = retarget(source, Q, t, target, spec.keypoints, scale=scale, rise=spec.rise, speed=spec.speed)
+    info = {"map": str(args.map), "motion": str(args.motion), "start": args.start, "stop": args.stop,
+            "source": spec.source, "target": spec.target, **r.info()}
+    atomic_write(Path(args.out), lambda f: np.savez(f, t=r.t, q=r.Q, retarget=np.array(dumps_json(info))), binary=True)
+    print(f"{spec.source} -> {spec.target}: {len(r.t)} frames, scale {r.scale:.3f}")
+    print(f"  {'keypoint':16s} {'RMS mm':>8s} {'max mm':>8s}  planted frames")
+    for name, (rms, mx) in r.residual_mm.items():
+        print(f"  {name:16s} {rms:8.1f} {mx:8.1f}  {int(r.planted[name].sum()) if name in r.planted else ''}")
+    for name, (rms, mx) in r.residual_deg.items():
+        print(f"  {name:16s} {rms:8.2f} {mx:8.2f}  (orientation, deg)")
+    print(f"wrote {args.out}")
+    return 0
