@@ -149,9 +149,12 @@ def summary(r: Result) -> str:
                      f"(mu {d['friction']:g}), centre-of-pressure margin {_mm(d.get('cop_margin_loaded', d['cop_margin']))}"
                      f" mm, ZMP margin {_mm(d['zmp_margin'])} mm, COM margin {_mm(d['com_margin'])} mm, "
                      f"torque-limit excess {d['max_torque_violation']:.2g} N m")
-        if d.get("toe_slip") is not None:
-            lines.append(f"  toe tip: forward travel {d['toe_displacement']:.3f} m; in contact slip "
-                         f"{100 * d['toe_slip']:.2f} cm, height up to {100 * d['max_toe_height']:.2f} cm")
+        if d.get("max_loaded_travel") is not None:
+            lines.append(f"  contact: loaded points travel {_mm(d['max_loaded_travel'])} mm, height up to "
+                         f"{_mm(d['max_loaded_height'])} mm, unloaded points down to {_mm(d['min_unloaded_height'])} mm; "
+                         f"the ground's work {d['ground_work_positive']:.3g} J positive, {d['ground_work']:.3g} J net")
+        if d.get("toe_displacement") is not None:
+            lines.append(f"  toe tip: forward travel {d['toe_displacement']:.3f} m")
         if d.get("eq33_feet_distance") is not None:
             lines.append(f"  Eq. 33 feet distance (both toe tips) {d['eq33_feet_distance']:.3f} m")
     t = r.times

@@ -145,10 +145,76 @@ def test_eq33_feet_distance_of_a_translating_stance():
     arrays.update(q=q, v=v)
     r = verify(model, arrays)
     assert np.isclose(r["eq33_feet_distance"], 2 * 0.5 * t[-1], rtol=1e-9)
-    # the same sliding stance moves the toe tip 2 mm in its contact phase, at its standing height
-    toe0 = training_jumps()[0]
-    d = model.createData()
-    pin.framesForwardKinematics(model, d, toe0.Q[0])
-    assert np.isclose(r["toe_slip"], 0.5 * t[-1], rtol=1e-9)
     assert np.isclose(r["toe_displacement"], 0.5 * t[-1], rtol=1e-9)
-    assert np.isclose(r["max_toe_height"], abs(d.oMf[model.getFrameId("ltoes_end")].translation[2]), atol=1e-12)
+    # with point forces (the heel and the toe point pushing back, the ball and the pad unloaded) every
+    # loaded point slides 2 mm along x at its standing height, and the ground does -(sum fx) 0.5 m/s
+    # 4 ms of work on both feet (numeric forward kinematics for the heights)
+    from latentoc.jump.contact import foot_points
+
+    F = np.zeros((len(t), 4, 2))
+    F[:, 0], F[:, 2] = (-60.0, 300.0), (-20.0, 100.0)
+    r = verify(model, {**arrays, "point_forces": F})
+    for key, value in (("max_loaded_travel", 0.5 * t[-1]), ("max_loaded_travel_x", 0.5 * t[-1]),
+                       ("ground_work", 2 * -80.0 * 0.5 * t[-1]), ("ground_work_positive", 0.0)):
+        assert np.isclose(r[key], value, rtol=1e-9, atol=1e-15), key
+    d = model.createData()
+    pin.framesForwardKinematics(model, d, q[0])
+    z = foot_points(model, d, FootGeometry(arrays["heel_offset"], arrays["pad_offset"]))[2]
+    assert np.isclose(r["max_loaded_height"], max(abs(z[0]), abs(z[2])), rtol=0, atol=1e-12)
+    assert np.isclose(r["min_unloaded_height"], min(z[1], z[3]), rtol=0, atol=1e-12)
+    still = verify(model, {**_static_arrays()[1], "point_forces": F})
+    assert still["max_loaded_travel"] == still["ground_work"] == still["ground_work_positive"] == 0.0
+
+
+def test_contact_kinematics_of_sliding_and_stuck_points():
+    """verify.contact_kinematics on an analytic motion (0.2 s, 1 kHz): point 0 slides along x
+    accelerating from rest at 3 m/s^2 under friction (fx, fz) = (-40, 200) N: it travels 3 T^2 / 2 and
+    the ground does 2 fx 3 T^2 / 2 of work (both feet, exact for the linear power); point 1 is
+    stuck under a load: no travel, no work; point 2 moves sideways at 0.1 m/s and is loaded on two
+    stretches (the first 50 ms, the last 100 ms): its travel counts from each stretch's start (1 cm,
+    none in x); point 3 is never loaded and dips 0.1 mm into the ground at one sample, pushed along
+    its motion by a force below the load threshold (positive work, 2 fx 0.05 m/s T). Out of contact
+    nothing is loaded."""
+    from latentoc.jump.verify import LOADED, contact_kinematics
+
+    W = 600.0
+    t = np.linspace(0.0, 0.2, 201)
+    T = t[-1]
+    n = len(t)
+    P, V, F = np.zeros((n, 4, 3)), np.zeros((n, 4, 3)), np.zeros((n, 4, 2))
+    P[:, 0, 0], V[:, 0, 0], F[:, 0] = 0.1 + 1.5 * t ** 2, 3.0 * t, (-40.0, 200.0)
+    P[:, 1] = (0.3, 0.1, 0.0)
+    F[:, 1] = (25.0, 150.0)
+    P[:, 2, 1], V[:, 2, 1] = 0.1 * t, 0.1
+    on2 = (t <= 0.05 + 1e-9) | (t >= 0.1 - 1e-9)
+    F[on2, 2] = (0.0, 100.0)
+    P[:, 3, 0], V[:, 3, 0], F[:, 3] = 0.05 * t, 0.05, (1.0, 0.5 * LOADED * W)
+    P[120, 3, 2] = -1e-4
+    contact = np.ones(n, bool)
+    r = contact_kinematics(t, P, V, F, contact, W)
+    assert np.isclose(r["max_loaded_travel"], 1.5 * T ** 2, rtol=1e-12)
+    assert np.isclose(r["max_loaded_travel_x"], 1.5 * T ** 2, rtol=1e-12)
+    assert r["max_loaded_height"] == 0.0 and r["min_unloaded_height"] == -1e-4
+    assert np.isclose(r["ground_work"], 2 * (-40.0 * 1.5 * T ** 2 + 1.0 * 0.05 * T), rtol=1e-12)
+    # the positive work is that of the net power: none under friction alone, all of it pushed along
+    friction, pushed = F.copy(), F.copy()
+    friction[:, 1:], pushed[:, :3] = 0.0, 0.0
+    r = contact_kinematics(t, P, V, friction, contact, W)
+    assert r["ground_work_positive"] == 0.0 and np.isclose(r["ground_work"], 2 * -40.0 * 1.5 * T ** 2, rtol=1e-12)
+    r = contact_kinematics(t, P, V, pushed, contact, W)
+    assert np.isclose(r["ground_work_positive"], 2 * 1.0 * 0.05 * T, rtol=1e-12)
+    assert np.isclose(r["ground_work"], r["ground_work_positive"], rtol=1e-12) and r["max_loaded_travel"] == 0.0
+    # the sideways point alone: 1 cm from the start of its second stretch (0.1 m/s for 0.1 s)
+    alone = F.copy()
+    alone[:, [0, 3]] = 0.0
+    r = contact_kinematics(t, P, V, alone, contact, W)
+    assert np.isclose(r["max_loaded_travel"], 0.1 * 0.1, rtol=1e-9) and r["max_loaded_travel_x"] == 0.0
+    assert r["ground_work"] == 0.0 and r["ground_work_positive"] == 0.0
+    # stuck points (the point under a load and the unloaded points at rest): no travel, no work
+    stuck = F.copy()
+    stuck[:, [0, 2, 3]] = 0.0
+    r = contact_kinematics(t, P * [0, 1, 1], np.zeros_like(V), stuck, contact, W)
+    assert r["max_loaded_travel"] == r["max_loaded_travel_x"] == r["ground_work"] == r["ground_work_positive"] == 0.0
+    # in flight nothing is loaded: the sliding point's travel is not counted there
+    r = contact_kinematics(t, P, V, F, t < 0.1, W)
+    assert np.isclose(r["max_loaded_travel_x"], 1.5 * (0.1 - 1e-3) ** 2, rtol=1e-9)

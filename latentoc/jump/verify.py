@@ -28,9 +28,14 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   ground-projected speed of both toe tips, ``|J_xy v|`` from the frame Jacobians (twice the jump
   distance only if the feet never move backwards or sideways);
 * with point forces: ``max_point_cone_violation``, max over points of |fx| - mu fz (body weights);
-* ``toe_slip``: the largest horizontal travel (max - min of x) of the toe tip within one contact
-  phase (stance, landing), and ``max_toe_height``: its largest |z| in contact; both 0 for a
-  toe pinned to the ground, at most ``foot_tolerance`` for the spline base;
+* contact kinematics of the exported point forces' points (heel, ball, toe, pad; a point is
+  *loaded* where its normal force exceeds :data:`LOADED` of body weight): ``max_loaded_travel``,
+  the farthest any loaded point moves along the ground (x, y) from where its loaded stretch began,
+  ``max_loaded_travel_x`` the same in x alone, ``max_loaded_height`` its largest |z|,
+  ``min_unloaded_height`` the lowest any point goes while it carries no load (the ground is
+  z = 0), ``ground_work_positive`` and ``ground_work`` the positive and the net work of the contact
+  forces on the body (both feet: the integral of sum f . v over the points, J): a fixed ground
+  does none, friction on a sliding point can only take energy out;
 * ``toe_displacement``: the toe tip's forward travel from the first to the last sample, the jump
   distance measured on the motion itself (the NLP's objective is its landing ground point x_L).
 """
@@ -39,10 +44,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import TOE_PAD, FootGeometry, foot_points, point_jacobians
+from .contact import FRAMES, POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
 from ..support_polygon import feet_polygon
 from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
+
+LOADED = 0.01  # of body weight: a point pushing harder than this is loaded
 
 
 def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -78,6 +85,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     nan = np.full(n, np.nan)
     out = {"torque": np.zeros((n, int(act.sum()))), "residual": np.zeros(n), "lateral": np.zeros(n),
            "symmetric_torque": np.zeros(n), "feet_speed": np.zeros(n), "toe_xz": np.zeros((n, 2)),
+           "points": np.zeros((n, len(POINTS), 3)), "point_velocity": np.zeros((n, len(POINTS), 3)),
            **{k: nan.copy() for k in ("normal", "friction", "cop", "cop_loaded", "point_cone")},
            "zmp": np.full((n, 4), np.nan), "com": np.full((n, 4), np.nan)}
     for i in range(n):
@@ -93,6 +101,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         out["toe_xz"][i] = d.oMf[ids[TOE]].translation[[0, 2]]
+        out["points"][i], out["point_velocity"][i] = _left_points(model, d, geom, v)
         gen: np.ndarray
         if not contact[i]:
             gen = np.zeros(model.nv)
@@ -129,6 +138,44 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     return out
 
 
+def _left_points(model: pin.Model, d: pin.Data, geom: FootGeometry, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World positions (4 x 3) and velocities of the left foot's points (frames and joint Jacobians placed)."""
+    P = foot_points(model, d, geom).T
+    V = np.zeros_like(P)
+    for k, point in enumerate(POINTS):
+        fid = model.getFrameId(FRAMES[point])
+        J = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
+        V[k] = (J[:3] - pin.skew(P[k] - d.oMf[fid].translation) @ J[3:]) @ v
+    return P, V
+
+
+def contact_kinematics(t: np.ndarray, points: np.ndarray, velocity: np.ndarray, forces: np.ndarray, contact: np.ndarray,
+                       weight: float) -> dict[str, float]:
+    """Where the loaded points are and how they move, and the work the ground does (module doc).
+    ``points``, ``velocity``: (n, 4, 3) of the left foot; ``forces``: (n, 4, 2) its (fx, fz)."""
+    loaded = (forces[:, :, 1] > LOADED * weight) & contact[:, None]
+    travel = travel_x = height = 0.0
+    for k in range(points.shape[1]):
+        on = loaded[:, k]
+        for a in np.flatnonzero(on & ~np.concatenate([[False], on[:-1]])):  # each loaded stretch's start
+            b = a + int(np.argmin(on[a:])) if not on[a:].all() else len(on)
+            d = points[a:b, k, :2] - points[a, k, :2]
+            travel = max(travel, float(np.max(np.linalg.norm(d, axis=1))))
+            travel_x = max(travel_x, float(np.max(np.abs(d[:, 0]))))
+        if on.any():
+            height = max(height, float(np.max(np.abs(points[on, k, 2]))))
+    free = ~loaded
+    power = 2.0 * np.sum(forces[:, :, 0] * velocity[:, :, 0] + forces[:, :, 1] * velocity[:, :, 2], axis=1)  # both feet
+    dt = np.diff(t)
+
+    def integral(p: np.ndarray) -> float:  # trapezoid rule
+        return float(np.sum(0.5 * (p[1:] + p[:-1]) * dt))
+
+    return {"max_loaded_travel": travel, "max_loaded_travel_x": travel_x, "max_loaded_height": height,
+            "min_unloaded_height": float(np.min(points[:, :, 2][free])) if free.any() else np.inf,
+            "ground_work_positive": integral(np.maximum(power, 0.0)), "ground_work": integral(power)}
+
+
 def _min(x: np.ndarray) -> float:
     return float(np.nanmin(x)) if np.isfinite(x).any() else np.inf
 
@@ -163,12 +210,9 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     fs, toe_xz = sr["feet_speed"], sr["toe_xz"]
     out["eq33_feet_distance"] = float(np.sum(0.5 * (fs[1:] + fs[:-1]) * np.diff(t)))
     out["toe_displacement"] = float(toe_xz[-1, 0] - toe_xz[0, 0])
-    out["toe_slip"], out["max_toe_height"] = 0.0, 0.0
-    t_td = float(arrays["touchdown"])
-    for phase in (contact & (t < t_td - 1e-9), contact & (t >= t_td - 1e-9)):
-        if phase.any():
-            out["toe_slip"] = max(out["toe_slip"], float(np.ptp(toe_xz[phase, 0])))
-            out["max_toe_height"] = max(out["max_toe_height"], float(np.max(np.abs(toe_xz[phase, 1]))))
+    if "point_forces" in arrays:
+        out.update(contact_kinematics(t, sr["points"], sr["point_velocity"], np.asarray(arrays["point_forces"]),
+                                      contact, W))
     if "loaded" in arrays:
         out["cop_margin_loaded"] = _min(sr["cop_loaded"])
     if "sigma2" in arrays:
