@@ -182,3 +182,25 @@ def test_training_stride_learns_every_kth_frame(training, stride, n_points):
     tube = gp.tube_size()
     assert all(np.max(gp.variance(T)) <= tube for T in gp.latent_trajectories())
     assert js.init["P"].shape == (21, 3) and np.all(np.isfinite(js.init["P"]))
+
+
+def test_plant_training_learns_and_limits_the_planted_jump():
+    """plant_training: the GPDM learns the planted jump (latentoc.jump.cleaning, tested in
+    test_planting.py), whose largest change per leg joint the set-up keeps, and the Eq. 34 limits
+    are the planted jump's own inverse dynamics: every torque of its B-spline fit lies inside them."""
+    from latentoc.jump.cleaning import planted_training
+    from latentoc.jump.contact import FootGeometry
+    from latentoc.jump.phases import training_phases
+    from latentoc.jump.training import jump_model, training_jumps
+
+    js = jp.setup(0, stride=3, plant=True)
+    model, smap = jump_model()
+    tr = training_jumps(0)[0]
+    geom = FootGeometry.from_standing(model, tr.Q[0])
+    planted = planted_training(model, smap, tr, training_phases(model, tr, geom=geom), geom)
+    np.testing.assert_allclose(js.training.Y, planted.training.Y, atol=0)
+    np.testing.assert_allclose(js.gpdm.Y, planted.training.Y[::3], atol=0)
+    assert js.planted is not None and js.planted.change_deg == planted.change_deg
+    assert 10 < js.planted.change_deg["ltoes_rx"] < 20  # the toe joint changes most (about 15 deg)
+    lim = js.limits
+    assert np.all(lim.tau <= lim.tau_max + 1e-9) and np.all(lim.tau >= lim.tau_min - 1e-9)

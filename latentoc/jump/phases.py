@@ -47,6 +47,22 @@ class Phases:
     ball_strike: float | None = None
     heel_strike: float | None = None
 
+    def flat(self, t: np.ndarray) -> np.ndarray:
+        """Whether the foot lies flat (the heel loaded) at contact times ``t``."""
+        t = np.asarray(t, float)
+        if self.heel_off is None or self.heel_strike is None:
+            return np.zeros(t.shape, bool)
+        return (t <= self.heel_off + 1e-9) | (t >= self.heel_strike - 1e-9)
+
+    def pivot(self, t: np.ndarray) -> np.ndarray:
+        """Whether the toes roll on the toe tip (after the ball rises, before it strikes) at contact
+        times ``t``."""
+        t = np.asarray(t, float)
+        if self.ball_off is None or self.ball_strike is None:
+            return np.zeros(t.shape, bool)
+        return ((t > self.ball_off + 1e-9) & (t <= self.takeoff + 1e-9)) | \
+            ((t >= self.touchdown - 1e-9) & (t < self.ball_strike - 1e-9))
+
     def loaded(self, point: str, t: np.ndarray) -> np.ndarray:
         """Whether ``point`` ("heel", "ball", "toe" or "pad": the toes') may carry force at contact
         times ``t``."""

@@ -29,6 +29,7 @@ from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, li
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, tube_delta
 from .base import base_to_freeflyer
+from .cleaning import PlantedTraining, plantable, planted_training
 from .contact import POINTS, FootGeometry, foot_points
 from .path import METHODS, joint_range_path, latent_path
 from .phases import Phases, training_phases
@@ -59,6 +60,7 @@ class JumpSetup:
     init: dict
     distance_training: float
     sym: SymbolicModel
+    planted: PlantedTraining | None = None  # what planting the feet changed in the captured jump
     _blocks: dict = field(default_factory=dict, repr=False)
 
     def robot(self, mu: float) -> JumpRobot:
@@ -88,11 +90,20 @@ def _toe_x(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
 
 def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, torque_margin: float = 0.1,
           gpdm_settings: GPDMSettings | None = None, path_smoothing: float = PATH_SMOOTHING,
-          torque_floor: float = 5.0, stride: int = 1) -> JumpSetup:
+          torque_floor: float = 5.0, stride: int = 1, plant: bool = False) -> JumpSetup:
     """Model, GPDM, phases, feet, torque limits and training start. ``stride``: the GPDM learns
-    every ``stride``-th captured frame (120 Hz) of each jump."""
+    every ``stride``-th captured frame (120 Hz) of each jump; ``plant``: the jumps' feet planted
+    first (:mod:`.cleaning`; of "all", the jumps whose contact schedule is whole)."""
     model, smap = jump_model()
     trs = training_jumps(training)
+    planted = None
+    if plant:
+        geom0 = FootGeometry.from_standing(model, trs[0].Q[0])
+        schedules = [training_phases(model, c, geom=geom0) for c in trs]
+        if not plantable(schedules[0]):
+            raise ValueError("the training jump's contact schedule is not whole (heel, ball, takeoff, touchdown)")
+        cleaned = [planted_training(model, smap, c, ph, geom0) for c, ph in zip(trs, schedules) if plantable(ph)]
+        trs, planted = [c.training for c in cleaned], cleaned[0]
     tr = trs[0]
     if not (isinstance(stride, (int, np.integer)) and not isinstance(stride, bool) and 1 <= stride <= len(tr.t) // 4):
         raise ValueError(f"training stride must be an integer from 1 to {len(tr.t) // 4} (frames), got {stride!r}")
@@ -114,7 +125,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
     init = {"P": P, "P_joint": P_joint, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
     return JumpSetup(model, smap, tr, gp, phases, geom, limits, init, float(np.median(bx[td:]) - bx[0]),
-                     SymbolicModel(model))
+                     SymbolicModel(model), planted)
 
 
 def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: float, keep: np.ndarray) -> np.ndarray:
@@ -148,6 +159,7 @@ SETUP_OPTIONS: dict[str, tuple[Check, Any, str]] = {
     "training_stride": (integer(1), 1, "the GPDM learns every k-th captured frame (120 Hz)"),
     "torque_margin": (number(0), 0.1, "torque limits widened by this fraction of each joint's peak |tau|"),
     "torque_floor": (number(0), 5.0, "... and by at least this many N m"),
+    "plant_training": (boolean(), False, "plant the training jump's feet before learning (least joint change)"),
     "sweep_starts": (choice(*SWEEP_STARTS), SWEEP_STARTS[0],
                      "a tube after a solved smaller one: solved warm and cold (the better kept), or warm"),
 }
@@ -229,11 +241,12 @@ def problem_setup(problem: Problem) -> JumpSetup:
     o = problem.options
     training: str | int = "all" if o["training_jumps"] == "all" else 0
     key = (training, problem.latent_dim, problem.control_points, o["torque_margin"], o["torque_floor"],
-           o["training_stride"])
+           o["training_stride"], o["plant_training"])
     if key not in _SETUP_CACHE:
         try:
             _SETUP_CACHE[key] = setup(training, problem.latent_dim, problem.control_points, o["torque_margin"],
-                                      torque_floor=o["torque_floor"], stride=o["training_stride"])
+                                      torque_floor=o["torque_floor"], stride=o["training_stride"],
+                                      plant=o["plant_training"])
         except ValueError as exc:
             raise SolveError(f"problem {problem.name!r}, [options] training_stride: {exc}") from None
     return _SETUP_CACHE[key]
@@ -358,6 +371,8 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
                   "fixed_joints": int(np.sum(np.all(path.P_range == 0, axis=0))), "max_tube_violation": 0.0})
     r.pop("settings", None)  # solve_jump's copy of the JumpSettings: jump_settings above
     r.update(checks)
+    if js.planted is not None:  # the training jump's change by planting, largest per joint (deg)
+        r["training_planting_deg"] = js.planted.change_deg
     r["violations"] = _violations(r, checks, s.mu)
     traj["q_initial"] = _training_on(js, traj["t"])
     traj["P"] = traj.pop("control_points")  # the result schema's names

@@ -59,12 +59,13 @@ class Retargeted:
     residual_mm: dict[str, tuple[float, float]]  # keypoint -> (RMS, max) position residual, mm (weight > 0)
     residual_deg: dict[str, tuple[float, float]]  # keypoint -> (RMS, max) orientation residual, deg (orientation > 0)
     planted: dict[str, np.ndarray] = field(default_factory=dict)  # foot keypoint -> planted per frame
+    at_limit: dict[str, float] = field(default_factory=dict)  # joint -> fraction of frames at a position limit
 
     def info(self) -> dict:
         return {"frames": int(len(self.t)), "scale": self.scale,
                 "residual_mm": {k: {"rms": r, "max": m} for k, (r, m) in self.residual_mm.items()},
                 "residual_deg": {k: {"rms": r, "max": m} for k, (r, m) in self.residual_deg.items()},
-                "planted_frames": {k: int(v.sum()) for k, v in self.planted.items()}}
+                "planted_frames": {k: int(v.sum()) for k, v in self.planted.items()}, "at_limit": self.at_limit}
 
 
 def frame_id(model: pin.Model, name: str, which: str) -> int:
@@ -287,10 +288,18 @@ def retarget(source: pin.Model, Q_src: np.ndarray, t: np.ndarray, target: pin.Mo
             res[i, k] = np.linalg.norm(dt.oMf[f].act(np.asarray(keypoints[k].offset, float)) - P[i, k])
             ang[i, k] = np.linalg.norm(pin.log3(R[i, k].T @ dt.oMf[f].rotation))
 
+    at_limit = {}
+    for j, name in zip(target.joints[1:], list(target.names)[1:]):
+        if j.nq == 1:
+            a, b = target.lowerPositionLimit[j.idx_q], target.upperPositionLimit[j.idx_q]
+            hit = float(np.mean((Q[:, j.idx_q] <= a + 1e-6) | (Q[:, j.idx_q] >= b - 1e-6)))
+            if hit > 0:
+                at_limit[name] = hit
+
     def rms_max(x: np.ndarray, unit: float) -> tuple[float, float]:
         return float(unit * np.sqrt(np.mean(x ** 2))), float(unit * x.max())
 
     return Retargeted(np.asarray(t, float), Q, scale,
                       {k.name: rms_max(res[:, j], 1e3) for j, k in enumerate(keypoints) if k.weight > 0},
                       {k.name: rms_max(ang[:, j], np.degrees(1.0)) for j, k in enumerate(keypoints) if k.orientation > 0},
-                      planted)
+                      planted, at_limit)

@@ -1,0 +1,114 @@
+"""The training jump with its feet planted, before the GPDM learns it (issue 34).
+
+The captured toes move by about a centimetre in stance (and 3 cm sideways), and the toe tip sinks
+1.4 cm into the floor at the push-off, so a model that learns the capture learns feet that slide.
+The contact model of the NLP (:mod:`.contact`, :class:`.phases.Phases`) holds the toes flat on
+their ground point, the foot flat while the heel is loaded, and lets the toes roll on the toe
+point alone between the ball's rise and the takeoff (and from the touchdown to the ball's strike);
+:func:`planted_training` makes the demonstration obey the same: the left toes body sits at its
+standing placement in the stance (at the standing orientation over the captured landing point in
+the landing) while it lies flat, only its toe point stays there while it rolls, and while the heel
+is loaded the toe joint holds its standing angle, approached smoothly over ``TOE_RAMP``. Only the left leg's seven joints change (the right is their mirror) and,
+where the leg cannot reach, the sagittal base; each frame changes them least (:func:`latentoc.motions.planting.plant`);
+the correction fades out over ``TAPER`` into the flight.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..mocap.symmetry import SymmetryMap
+from ..motions.planting import Plant, plant, taper
+from .base import base_to_freeflyer, freeflyer_to_base
+from .contact import POINTS, FootGeometry, foot_points
+from .phases import Phases
+from .training import JumpTraining
+
+__all__ = ["ANCHOR", "HINGE", "LEG_JOINTS", "PlantedTraining", "planted_training", "plantable"]
+
+ANCHOR = "ltoes"  # the body held flat on the ground in contact
+HINGE = "ltoes_rx"  # the toe joint: the hinge between the flat foot and the flat toes
+LEG_JOINTS = ("lfemur_rz", "lfemur_ry", "lfemur_rx", "ltibia_rx", "lfoot_rz", "lfoot_rx", "ltoes_rx")
+TAPER = 0.05  # s over which the correction fades into the flight
+TOE_RAMP = 0.05  # s over which the toe joint is brought to its standing angle before the heel loads
+SAGITTAL_BASE_V = (0, 2, 4)  # the base's x, z and pitch velocity coordinates
+BASE_WEIGHTS = np.array([10.0, 10.0, 3.0])  # a base change of 1 cm weighs as 0.1 rad of a joint, 1 deg of pitch as 3
+
+
+@dataclass
+class PlantedTraining:
+    """The planted training jump and what planting changed."""
+
+    training: JumpTraining
+    change_deg: dict[str, float]  # largest |change| per leg joint, degrees
+    rms_change_deg: dict[str, float]  # root mean square over the frames, degrees
+    landing_shift: np.ndarray  # the landing's planted toes frame less the standing one (x, y, z), m
+    base_change: np.ndarray  # largest |change| of the base's x, z (m) and pitch (rad)
+
+
+def _ramped(theta: np.ndarray, target: float, held: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The toe angle brought smoothly to ``target`` where it is ``held`` (cosine ramp before and after)."""
+    delta = np.where(held, target - theta, 0.0)
+    return theta + taper(delta[:, None], held, t, TOE_RAMP)[:, 0]
+
+
+def plantable(phases: Phases) -> bool:
+    """Whether a captured jump's contact schedule is whole: the heel leaves the ground after the start,
+    the ball after it and no later than the takeoff, and both strike back after the touchdown (a
+    capture cut in mid-motion has none of that, and its feet cannot be planted)."""
+    ph = phases
+    if ph.heel_off is None or ph.ball_off is None or ph.ball_strike is None or ph.heel_strike is None:
+        return False
+    return 0.0 < ph.heel_off <= ph.ball_off <= ph.takeoff < ph.touchdown <= ph.ball_strike <= ph.heel_strike < ph.duration
+
+
+def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phases: Phases,
+                     geom: FootGeometry) -> PlantedTraining:
+    """The training jump ``tr`` with its feet planted (module doc); ``geom``: the feet's points."""
+    t, Q = tr.t, tr.Q
+    stance = t <= phases.takeoff + 1e-9
+    landing = t >= phases.touchdown - 1e-9
+    d = model.createData()
+    fid = model.getFrameId(ANCHOR)
+    pin.framesForwardKinematics(model, d, Q[0])
+    standing = d.oMf[fid].copy()
+    landed = np.zeros((int(landing.sum()), 3))
+    for k, i in enumerate(np.flatnonzero(landing)):
+        pin.framesForwardKinematics(model, d, Q[i])
+        landed[k] = d.oMf[fid].translation
+    point = np.median(landed[:, :2], axis=0)
+    # over the captured landing point, at the standing width and heading (the NLP's feet keep them)
+    on_ground = pin.SE3(standing.rotation, np.array([point[0], standing.translation[1], standing.translation[2]]))
+    jid = model.getJointId(HINGE)
+    iq = model.joints[jid].idx_q
+    flat = phases.flat(t) & (stance | landing)
+    contact = stance | landing
+    rolling = phases.pivot(t) & contact
+    pin.framesForwardKinematics(model, d, Q[0])
+    toe = foot_points(model, d, geom)[:, POINTS.index("toe")]  # standing, on the ground
+    toe_local = standing.actInv(toe)
+    toe_landed = toe + on_ground.translation - standing.translation
+    theta = _ramped(Q[:, iq], float(Q[0, iq]), flat, t)
+    held = contact & (np.abs(t[:, None] - t[flat][None, :]).min(axis=1) < TOE_RAMP)
+    legs_v = [model.joints[model.getJointId(n)].idx_v for n in LEG_JOINTS]
+    free_v = np.array(list(SAGITTAL_BASE_V) + legs_v)
+    weights = np.concatenate([BASE_WEIGHTS, np.ones(len(legs_v))])
+    iv = model.joints[jid].idx_v
+    plants = [Plant(ANCHOR, standing, stance & ~rolling), Plant(ANCHOR, on_ground, landing & ~rolling),
+              Plant(ANCHOR, pin.SE3(np.eye(3), toe), stance & rolling, toe_local),
+              Plant(ANCHOR, pin.SE3(np.eye(3), toe_landed), landing & rolling, toe_local)]
+    Qp = plant(model, Q, free_v, plants, {iv: (theta, held)}, weights)
+    Y0, legs = tr.Y, [smap.learned_names.index(n) for n in LEG_JOINTS]
+    dY = np.zeros_like(Y0)
+    dY[:, legs] = smap.to_learned(Qp)[:, legs] - Y0[:, legs]
+    dY = taper(dY, contact, t, TAPER)
+    db = taper(np.where(contact[:, None], freeflyer_to_base(Qp[:, :7]) - tr.base, 0.0), contact, t, TAPER)
+    Y, base = Y0 + dY, tr.base + db
+    Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
+    change = {n: float(np.degrees(np.max(np.abs(dY[:, k])))) for n, k in zip(LEG_JOINTS, legs)}
+    rms = {n: float(np.degrees(np.sqrt(np.mean(dY[:, k] ** 2)))) for n, k in zip(LEG_JOINTS, legs)}
+    base_change = np.max(np.abs(db), axis=0)
+    return PlantedTraining(JumpTraining(t, Y, base, Qs), change, rms, on_ground.translation - standing.translation,
+                           base_change)
