@@ -32,7 +32,7 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   *loaded* where its normal force exceeds :data:`LOADED` of body weight): ``max_loaded_travel``,
   the farthest any loaded point moves along the ground (x, y) from where its loaded stretch began,
   ``max_loaded_travel_x`` the same in x alone, ``max_loaded_height`` its largest |z|,
-  ``min_unloaded_height`` the lowest any point goes while it carries no load (the ground is
+  ``min_unloaded_height`` the lowest any point goes in contact while it carries no load (the ground is
   z = 0), ``ground_work_positive`` and ``ground_work`` the positive and the net work of the contact
   forces on the body (both feet: the integral of sum f . v over the points, J): a fixed ground
   does none, friction on a sliding point can only take energy out;
@@ -85,7 +85,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     nan = np.full(n, np.nan)
     out = {"torque": np.zeros((n, int(act.sum()))), "residual": np.zeros(n), "lateral": np.zeros(n),
            "symmetric_torque": np.zeros(n), "feet_speed": np.zeros(n), "toe_xz": np.zeros((n, 2)),
-           "points": np.zeros((n, len(POINTS), 3)), "point_velocity": np.zeros((n, len(POINTS), 3)),
+           "points": np.full((n, len(POINTS), 3), np.nan), "point_velocity": np.full((n, len(POINTS), 3), np.nan),
            **{k: nan.copy() for k in ("normal", "friction", "cop", "cop_loaded", "point_cone")},
            "zmp": np.full((n, 4), np.nan), "com": np.full((n, 4), np.nan)}
     for i in range(n):
@@ -101,7 +101,8 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         out["toe_xz"][i] = d.oMf[ids[TOE]].translation[[0, 2]]
-        out["points"][i], out["point_velocity"][i] = _left_points(model, d, geom, v)
+        if contact[i]:
+            out["points"][i], out["point_velocity"][i] = _left_points(model, d, geom, v)
         gen: np.ndarray
         if not contact[i]:
             gen = np.zeros(model.nv)
@@ -152,8 +153,9 @@ def _left_points(model: pin.Model, d: pin.Data, geom: FootGeometry, v: np.ndarra
 def contact_kinematics(t: np.ndarray, points: np.ndarray, velocity: np.ndarray, forces: np.ndarray, contact: np.ndarray,
                        weight: float) -> dict[str, float]:
     """Where the loaded points are and how they move, and the work the ground does (module doc).
-    ``points``, ``velocity``: (n, 4, 3) of the left foot; ``forces``: (n, 4, 2) its (fx, fz)."""
+    ``points``, ``velocity``: (n, 4, 3) of the left foot (used in contact only); ``forces``: (n, 4, 2) its (fx, fz)."""
     loaded = (forces[:, :, 1] > LOADED * weight) & contact[:, None]
+    points, velocity = np.where(contact[:, None, None], points, 0.0), np.where(contact[:, None, None], velocity, 0.0)
     travel = travel_x = height = 0.0
     for k in range(points.shape[1]):
         on = loaded[:, k]
@@ -164,7 +166,7 @@ def contact_kinematics(t: np.ndarray, points: np.ndarray, velocity: np.ndarray, 
             travel_x = max(travel_x, float(np.max(np.abs(d[:, 0]))))
         if on.any():
             height = max(height, float(np.max(np.abs(points[on, k, 2]))))
-    free = ~loaded
+    free = ~loaded & contact[:, None]
     power = 2.0 * np.sum(forces[:, :, 0] * velocity[:, :, 0] + forces[:, :, 1] * velocity[:, :, 2], axis=1)  # both feet
     dt = np.diff(t)
 
