@@ -110,7 +110,7 @@ def test_jump_options_are_the_jump_settings():
     assert s.mu == data["friction"] and s.n_flight == data["n_flight"] and s.n_control == 21 and s.tube == 0.02
     assert s.exchange_rounds == defaults.exchange_rounds  # not in the file: JumpSettings' default
     assert {k for k, v in OPTIONS.items() if v is None} == {"training_jumps", "training_stride", "torque_margin",
-                                                            "torque_floor", "sweep_starts"}
+                                                            "torque_floor", "plant_training", "sweep_starts"}
 
 
 def test_overrides_are_checked_like_the_file():
