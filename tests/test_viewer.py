@@ -10,6 +10,7 @@ import base64
 import html
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -183,6 +184,49 @@ def test_jump_scene_has_every_contact_point_and_the_ghost():
     assert np.allclose(forces[:, [0, 1, 3, 4]], 0.0)
 
 
+def _replayed(traj, shift: float = 0.5) -> dict[str, np.ndarray]:
+    """A replay in simulation.npz's format (times from 0, at its own 2 ms rate) of the result's motion
+    moved ``shift`` m along x."""
+    t = np.asarray(traj["t"], float)
+    ts = np.arange(0.0, t[-1] - t[0] + 1e-9, 0.002)
+    Q = np.asarray(traj["q"], float)[np.abs(t[None, :] - t[0] - ts[:, None]).argmin(axis=1)].copy()
+    Q[:, 0] += shift
+    return {"t": ts, "q": Q}
+
+
+def test_the_simulated_motion_is_shown_beside_the_plan(tmp_path):
+    """A result folder with simulate's replay (simulation.npz): the view's scene has it as a third
+    motion, posed like the others at the replay's nearest time; a folder without one, or with an
+    unreadable one, has none."""
+    r = make_jump_result()
+    traj = r.trajectory
+    model = pin.Model()
+    model.loadFromString(str(traj["model"]))
+    sim = _replayed(traj)
+    idx = sample_indices(traj["t"], 50)
+    parts, _ = robot_parts(model)
+    scene = build_scene(r, simulated=sim)
+    n = len(idx)
+    shown = f32(scene["motions"]["simulated"], n, len(parts), 7)
+    t = np.asarray(traj["t"])[idx] - traj["t"][0]
+    near = np.abs(sim["t"][None, :] - t[:, None]).argmin(axis=1)
+    assert np.allclose(shown, part_poses(model, parts, sim["q"][near]), atol=1e-5)
+    optimised = f32(scene["motions"]["optimised"], n, len(parts), 7)
+    assert np.allclose(shown[..., 0] - optimised[..., 0], 0.5, atol=1e-5)  # 0.5 m ahead, as replayed
+    folder = tmp_path / "jump"
+    r.save(folder)
+
+    def motions_in(page: Path) -> set[str]:
+        data = re.search(r'<script type="application/json" id="latentoc-scene">(.*?)</script>', page.read_text(), flags=re.S)
+        return set(json.loads(data.group(1))["motions"])
+
+    assert motions_in(write_html(folder)) == {"optimised", "initial"}
+    np.savez(folder / "simulation.npz", **sim)
+    assert motions_in(write_html(folder)) == {"optimised", "initial", "simulated"}
+    (folder / "simulation.npz").write_bytes(b"not an npz")
+    assert motions_in(write_html(folder)) == {"optimised", "initial"}
+
+
 def test_page_is_self_contained(tmp_path):
     """No external resource: no src/href to a file or the network; three.js's licence notice is in; the
     scene data parses back, and no '</script>' hides in it."""
@@ -223,6 +267,7 @@ def pages(tmp_path_factory, panda_reduced):
             zero = b64(np.zeros(len(base64.b64decode(C["forces"])) // 4))
             twins["-no-forces"] = {**scene, "contacts": {**C, "forces": zero}}
             twins["-no-ghost"] = {**scene, "motions": {"optimised": scene["motions"]["optimised"]}}
+            twins["-simulated"] = build_scene(r, simulated=_replayed(r.trajectory))
         for suffix, sc in twins.items():
             (d / f"{name}{suffix}.html").write_text(page_html(sc))
         pages[name] = {suffix: d / f"{name}{suffix}.html" for suffix in twins}
@@ -267,7 +312,7 @@ def shown_contacts(page, t: float) -> tuple[int, list[dict]]:
     return frame, json.loads(html.unescape(re.search(r'data-contacts="([^"]*)"', text).group(1)))
 
 
-@pytest.mark.slow  # starts a browser seven times (about 5 s each)
+@pytest.mark.slow  # starts a browser eight times (about 5 s each)
 def test_the_jump_page_draws_every_contact_point_in_a_browser(pages, tmp_path):
     """The broad jump in the export's format, in chromium: in the stance all four points of each foot
     have their arrow and cone, where the jump's own code puts the points, each arrow as long as its
@@ -301,6 +346,10 @@ def test_the_jump_page_draws_every_contact_point_in_a_browser(pages, tmp_path):
     assert changed(stance, flight) > 300, "the pose does not follow the motion's time"
     alone = screenshot(jump["-no-ghost"], tmp_path / "alone.png", 300, url_suffix="#t=0.6")
     assert changed(flight, alone) > 1000, "the initial motion's ghost is not drawn"
+    replay = screenshot(jump["-simulated"], tmp_path / "replay.png", 300, url_suffix="#t=0.6")
+    assert changed(replay, flight) > 1000, "the simulated motion is not drawn"
+    r, g, b = (view_of(replay)[..., k].astype(int) for k in range(3))
+    assert np.sum((r > g + 40) & (g > b + 20)) > 200, "the replay is not drawn in orange"  # the only orange
 
 
 def test_cli_view_writes_the_page(tmp_path, capsys):

@@ -6,8 +6,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
+
+from ..files import NPZ_ERRORS
 from ..results import Result, result_and_output
 from .scene import build_scene
+
+SIM_NPZ = "simulation.npz"  # latentoc simulate's replay in a result folder
 
 __all__ = ["write_html", "page_html", "THREE_VERSION"]
 
@@ -43,6 +48,7 @@ PAGE = """<!doctype html>
   <select id="speed" title="playback speed"><option value="1">1x</option><option value="0.5">0.5x</option>
     <option value="0.25">0.25x</option><option value="0.1">0.1x</option></select>
   <label><input id="ghost" type="checkbox" checked> initial motion</label>
+  <label><input id="simulated" type="checkbox" checked> simulated (MuJoCo)</label>
   <label><input id="forces" type="checkbox" checked> forces</label>
   <label><input id="cones" type="checkbox" checked> friction cones</label>
   <label><input id="polygon" type="checkbox" checked> support polygon, COM, ZMP</label>
@@ -74,8 +80,24 @@ def page_html(scene: dict) -> str:
 
 def write_html(result: Result | str | Path, path: str | Path | None = None, rate_hz: float = 50.0) -> Path:
     """Write the 3-D view of a result (or of the result folder a path names) to ``path`` (default:
-    the folder's ``view.html``); returns the path."""
+    the folder's ``view.html``); returns the path. A folder's ``simulation.npz`` (``latentoc
+    simulate``) is shown beside the planned motion."""
+    folder = None if isinstance(result, Result) else Path(result)
     result, out = result_and_output(result, path, "view.html", "write_html")
+    simulated = _simulation(folder) if folder is not None else None
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page_html(build_scene(result, rate_hz)), encoding="utf-8")
+    out.write_text(page_html(build_scene(result, rate_hz, simulated)), encoding="utf-8")
     return out
+
+
+def _simulation(folder: Path) -> dict[str, np.ndarray] | None:
+    """``t`` and ``q`` of the folder's replay, or None (none, or not a readable replay)."""
+    path = folder / SIM_NPZ
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            t, q = np.asarray(f["t"], float), np.asarray(f["q"], float)
+    except NPZ_ERRORS + (KeyError,):
+        return None
+    return {"t": t, "q": q} if t.ndim == 1 and q.ndim == 2 and len(t) == len(q) and len(t) > 0 else None

@@ -114,8 +114,16 @@ def _contacts(model: pin.Model, traj: Mapping[str, Any], idx: np.ndarray) -> dic
             "force_scale": FORCE_SCALE}
 
 
-def build_scene(result: Result, rate_hz: float = 50.0) -> dict[str, Any]:
-    """The scene of ``result`` as JSON-ready data (module doc)."""
+def _resampled_poses(model: pin.Model, parts: list, t_own: np.ndarray, Q: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Part poses of the motion ``Q`` (times ``t_own``) at the scene's times ``t``: each time's
+    nearest sample (the last one beyond its end)."""
+    near = np.abs(np.asarray(t_own, float)[None, :] - t[:, None]).argmin(axis=1)
+    return part_poses(model, parts, np.asarray(Q, float)[near])
+
+
+def build_scene(result: Result, rate_hz: float = 50.0, simulated: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The scene of ``result`` as JSON-ready data (module doc); ``simulated``: a replay of it
+    (``simulation.npz``'s ``t`` from 0 and ``q``), shown beside the planned motion."""
     traj = result.trajectory
     model = model_of(traj)
     t = np.asarray(traj["t"], dtype=float)
@@ -131,10 +139,13 @@ def build_scene(result: Result, rate_hz: float = 50.0) -> dict[str, Any]:
     if "q_initial" in traj:
         Q0 = np.asarray(traj["q_initial"], dtype=float)
         t0 = t if len(Q0) == len(t) else np.linspace(t[0], t[-1], len(Q0))  # its own rate: the same duration
-        near = np.abs(t0[None, :] - t[idx][:, None]).argmin(axis=1)
-        ghost = part_poses(model, parts, Q0[near])
+        ghost = _resampled_poses(model, parts, t0, Q0, t[idx])
         motions["initial"] = b64(ghost)
         reach.append(ghost[..., :3].reshape(-1, 3))
+    if simulated is not None:  # the replay's own times start at the motion's start
+        sim = _resampled_poses(model, parts, np.asarray(simulated["t"], float) + t[0], simulated["q"], t[idx])
+        motions["simulated"] = b64(sim)
+        reach.append(sim[..., :3].reshape(-1, 3))
     pts = np.vstack(reach)
     radius = max([float(np.max(np.linalg.norm(p.vertices, axis=1))) for p in parts if p.vertices is not None]
                  + [0.5 * max(p.size) for p in parts if p.size] + [0.05])

@@ -103,11 +103,11 @@
   const geometries = S.parts.map(partGeometry);
   const times = f32(S.times);
   const motions = {};
-  function addMotion(name, ghost) {
+  function addMotion(name, ghost) { // ghost: the colour of a translucent motion (none: the robot's own colours)
     const group = new THREE.Group();
     const objects = S.parts.map((p, k) => {
       const material = ghost
-        ? new THREE.MeshStandardMaterial({ color: 0x7fa7d9, transparent: true, opacity: 0.28, depthWrite: false, roughness: 0.8 })
+        ? new THREE.MeshStandardMaterial({ color: ghost, transparent: true, opacity: 0.28, depthWrite: false, roughness: 0.8 })
         : new THREE.MeshStandardMaterial({ color: new THREE.Color().fromArray(p.colour), roughness: 0.55, metalness: 0.05 });
       const o = new THREE.Mesh(geometries[k], material);
       if (ghost) o.renderOrder = 2;
@@ -117,8 +117,9 @@
     scene.add(group);
     motions[name] = { group: group, objects: objects, poses: f32(S.motions[name]) };
   }
-  addMotion("optimised", false);
-  if (S.motions.initial) addMotion("initial", true);
+  addMotion("optimised", null);
+  if (S.motions.initial) addMotion("initial", 0x7fa7d9);
+  if (S.motions.simulated) addMotion("simulated", 0xe0823a); // the MuJoCo replay, orange
 
   // ---------------------------------------------------------------- contacts
   let contacts = null;
@@ -208,14 +209,17 @@
   // ---------------------------------------------------------------- controls and the clock
   const controls = {
     play: document.getElementById("play"), slider: document.getElementById("time"), label: document.getElementById("clock"),
-    speed: document.getElementById("speed"), ghost: document.getElementById("ghost"), forces: document.getElementById("forces"),
+    speed: document.getElementById("speed"), ghost: document.getElementById("ghost"), simulated: document.getElementById("simulated"),
+    forces: document.getElementById("forces"),
     cones: document.getElementById("cones"), polygon: document.getElementById("polygon"),
   };
   document.getElementById("title").textContent = S.title;
   document.getElementById("summary").textContent = S.summary + " | " + (S.parts_are === "meshes" ? "the robot's meshes" : "skeleton capsules") +
     (S.motions.initial ? " | ghost: the initial motion" : "") +
+    (S.motions.simulated ? " | orange: its replay in MuJoCo" : "") +
     (S.contacts ? " | forces: " + S.contacts.force_scale + " m per body weight, cones: friction mu = " + S.contacts.mu : "");
   if (!S.motions.initial) controls.ghost.parentElement.style.display = "none";
+  if (!S.motions.simulated) controls.simulated.parentElement.style.display = "none";
   if (!S.contacts) for (const k of ["forces", "cones", "polygon"]) controls[k].parentElement.style.display = "none";
   const hold = 0.5; // s on the last frame before the loop starts again
   const clock = { playing: true, t: 0, wall: performance.now(), played: 0, ticks: 0 }; // played: seconds, never wrapped
@@ -230,12 +234,13 @@
   controls.slider.addEventListener("input", () => { clock.playing = false; clock.t = parseFloat(controls.slider.value); });
   function visibility() {
     if (motions.initial) motions.initial.group.visible = controls.ghost.checked;
+    if (motions.simulated) motions.simulated.group.visible = controls.simulated.checked;
     if (contacts) {
       contacts.arrowGroup.visible = controls.forces.checked;
       contacts.coneGroup.visible = controls.cones.checked;
     }
   }
-  for (const k of ["ghost", "forces", "cones", "polygon"]) controls[k].addEventListener("change", visibility);
+  for (const k of ["ghost", "simulated", "forces", "cones", "polygon"]) controls[k].addEventListener("change", visibility);
   visibility();
 
   function resize() {
