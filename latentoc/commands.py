@@ -387,6 +387,9 @@ def cmd_retarget(args: argparse.Namespace) -> int:
         print(f"  {name:16s} {rms:8.1f} {mx:8.1f}  {int(r.planted[name].sum()) if name in r.planted else ''}")
     for name, (rms, mx) in r.residual_deg.items():
         print(f"  {name:16s} {rms:8.2f} {mx:8.2f}  (orientation, deg)")
+    if r.too_fast:
+        print("  faster than the URDF allows (x its limit): " + ", ".join(
+            f"{j} {f:.2f}" for j, f in sorted(r.too_fast.items(), key=lambda x: -x[1])))
     if r.at_limit:
         print("  at a joint limit: " + ", ".join(f"{j} {100 * f:.0f} %" for j, f in sorted(r.at_limit.items(), key=lambda x: -x[1])))
     print(f"wrote {args.out}")

@@ -44,6 +44,13 @@ def test_a_robot_retargeted_onto_itself_is_recovered_exactly():
     assert max(m for _, m in r.residual_mm.values()) < 1e-6
     assert max(m for _, m in r.residual_deg.values()) < 1e-6
     assert max(np.abs(pin.difference(g, a, b)).max() for a, b in zip(Q, r.Q)) < 1e-8
+    # played 20 times as fast, some joints pass their URDF velocity limits: the report names exactly those
+    fast = retarget(g, Q, t / 20, g, kps, rest_source=pin.neutral(g), rest_target=pin.neutral(g))
+    speed = np.abs(np.gradient(Q[:, 7:], t / 20, axis=0)).max(axis=0) / g.velocityLimit[6:]
+    names = list(g.names)[2:]
+    assert fast.too_fast.keys() == {n for n, s in zip(names, speed) if s > 1} and fast.too_fast
+    assert all(np.isclose(fast.too_fast[n], s, rtol=1e-6) for n, s in zip(names, speed) if s > 1)
+    assert not r.too_fast
 
 
 def test_the_frame_jacobian_matches_finite_differences():

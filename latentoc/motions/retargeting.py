@@ -60,12 +60,14 @@ class Retargeted:
     residual_deg: dict[str, tuple[float, float]]  # keypoint -> (RMS, max) orientation residual, deg (orientation > 0)
     planted: dict[str, np.ndarray] = field(default_factory=dict)  # foot keypoint -> planted per frame
     at_limit: dict[str, float] = field(default_factory=dict)  # joint -> fraction of frames at a position limit
+    too_fast: dict[str, float] = field(default_factory=dict)  # joint -> its largest speed over its URDF limit (> 1)
 
     def info(self) -> dict:
         return {"frames": int(len(self.t)), "scale": self.scale,
                 "residual_mm": {k: {"rms": r, "max": m} for k, (r, m) in self.residual_mm.items()},
                 "residual_deg": {k: {"rms": r, "max": m} for k, (r, m) in self.residual_deg.items()},
-                "planted_frames": {k: int(v.sum()) for k, v in self.planted.items()}, "at_limit": self.at_limit}
+                "planted_frames": {k: int(v.sum()) for k, v in self.planted.items()}, "at_limit": self.at_limit,
+                "too_fast": self.too_fast}
 
 
 def frame_id(model: pin.Model, name: str, which: str) -> int:
@@ -296,10 +298,20 @@ def retarget(source: pin.Model, Q_src: np.ndarray, t: np.ndarray, target: pin.Mo
             if hit > 0:
                 at_limit[name] = hit
 
+    too_fast = {}  # central differences of the joint angles against the URDF's velocity limits
+    V = np.gradient(Q[:, 7:] if target.joints[1].shortname() == "JointModelFreeFlyer" else Q, t, axis=0) \
+        if len(Q) > 1 else np.zeros((1, 0))
+    for j, name in zip(target.joints[1:], list(target.names)[1:]):
+        if j.nq == 1 and j.nv == 1:
+            col = j.idx_q - (target.nq - V.shape[1])
+            vmax = target.velocityLimit[j.idx_v]
+            if 0 < vmax < np.inf and 0 <= col < V.shape[1] and np.abs(V[:, col]).max() > vmax:
+                too_fast[name] = float(np.abs(V[:, col]).max() / vmax)
+
     def rms_max(x: np.ndarray, unit: float) -> tuple[float, float]:
         return float(unit * np.sqrt(np.mean(x ** 2))), float(unit * x.max())
 
     return Retargeted(np.asarray(t, float), Q, scale,
                       {k.name: rms_max(res[:, j], 1e3) for j, k in enumerate(keypoints) if k.weight > 0},
                       {k.name: rms_max(ang[:, j], np.degrees(1.0)) for j, k in enumerate(keypoints) if k.orientation > 0},
-                      planted, at_limit)
+                      planted, at_limit, too_fast)
