@@ -299,14 +299,12 @@ def retarget(source: pin.Model, Q_src: np.ndarray, t: np.ndarray, target: pin.Mo
                 at_limit[name] = hit
 
     too_fast = {}  # central differences of the joint angles against the URDF's velocity limits
-    V = np.gradient(Q[:, 7:] if target.joints[1].shortname() == "JointModelFreeFlyer" else Q, t, axis=0) \
-        if len(Q) > 1 else np.zeros((1, 0))
     for j, name in zip(target.joints[1:], list(target.names)[1:]):
-        if j.nq == 1 and j.nv == 1:
-            col = j.idx_q - (target.nq - V.shape[1])
-            vmax = target.velocityLimit[j.idx_v]
-            if 0 < vmax < np.inf and 0 <= col < V.shape[1] and np.abs(V[:, col]).max() > vmax:
-                too_fast[name] = float(np.abs(V[:, col]).max() / vmax)
+        vmax = float(target.velocityLimit[j.idx_v]) if j.nv == 1 else 0.0
+        if j.nq == 1 and len(Q) > 1 and 0 < vmax < np.inf:
+            speed = float(np.abs(np.gradient(Q[:, j.idx_q], t)).max())
+            if speed > vmax:
+                too_fast[name] = speed / vmax
 
     def rms_max(x: np.ndarray, unit: float) -> tuple[float, float]:
         return float(unit * np.sqrt(np.mean(x ** 2))), float(unit * x.max())
