@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
 from types import FrameType
+from typing import Any
 
 __all__ = ["watching", "deferred", "interrupts_seen"]
 
@@ -38,41 +39,16 @@ def _count(signum: int, frame: FrameType | None) -> None:
 
 
 @contextmanager
-def watching() -> Iterator[None]:
-    """Run the block with SIGINT recorded (module doc); KeyboardInterrupt at its end if a SIGINT
-    arrived and was swallowed inside it. Only in the main thread, and only where SIGINT has
-    Python's default handler (an application's own handler is left alone)."""
+def _handled(handler: Callable[[int, FrameType | None], None], over: tuple[Any, ...]) -> Iterator[None]:
+    """Run the block with SIGINT sent to ``handler`` (in the main thread, where the current handler
+    is one of ``over``); KeyboardInterrupt at its end if a SIGINT arrived, also when the block fails
+    because of it (inside C code: CasADi turns it into a SystemError)."""
     main = threading.current_thread() is threading.main_thread()
     previous = signal.getsignal(signal.SIGINT) if main else None
-    install = previous is signal.default_int_handler
+    install = any(previous is h for h in over)
     start = _seen
     if install:
-        signal.signal(signal.SIGINT, _record)
-    try:
-        yield
-    except Exception as exc:  # an error a SIGINT caused inside C code (CasADi: a SystemError)
-        if _seen > start:
-            raise KeyboardInterrupt from exc
-        raise
-    finally:
-        if install:
-            signal.signal(signal.SIGINT, previous)
-    if _seen > start:
-        raise KeyboardInterrupt
-
-
-@contextmanager
-def deferred() -> Iterator[None]:
-    """Run the block with SIGINT counted but not raised (:func:`interrupts_seen` grows), so that no
-    KeyboardInterrupt starts inside C code that calls back into Python (Ipopt's callbacks check the
-    count and stop the solver instead); KeyboardInterrupt at the block's end if one arrived. Only in
-    the main thread, and only over Python's default handler or :func:`watching`'s."""
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.getsignal(signal.SIGINT) if main else None
-    install = previous is signal.default_int_handler or previous is _record
-    start = _seen
-    if install:
-        signal.signal(signal.SIGINT, _count)
+        signal.signal(signal.SIGINT, handler)
     try:
         yield
     except Exception as exc:
@@ -84,3 +60,18 @@ def deferred() -> Iterator[None]:
             signal.signal(signal.SIGINT, previous)
     if _seen > start:
         raise KeyboardInterrupt
+
+
+def watching() -> AbstractContextManager[None]:
+    """Run the block with SIGINT recorded (module doc); KeyboardInterrupt at its end if a SIGINT
+    arrived and was swallowed inside it. Only in the main thread, and only where SIGINT has
+    Python's default handler (an application's own handler is left alone)."""
+    return _handled(_record, (signal.default_int_handler,))
+
+
+def deferred() -> AbstractContextManager[None]:
+    """Run the block with SIGINT counted but not raised (:func:`interrupts_seen` grows), so that no
+    KeyboardInterrupt starts inside C code that calls back into Python (Ipopt's callbacks check the
+    count and stop the solver instead); KeyboardInterrupt at the block's end if one arrived. Only in
+    the main thread, and only over Python's default handler or :func:`watching`'s."""
+    return _handled(_count, (signal.default_int_handler, _record))
