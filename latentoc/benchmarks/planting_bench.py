@@ -30,6 +30,7 @@ from ..jump.contact import FRAMES, POINTS, foot_points, joint_embedding
 from ..jump.problem import setup
 from ..jump.torque_limits import contact_torques
 from ..jump.training import TOE
+from ..kinematics import point_jacobian
 from ..latent.gp_layer import GPLayer
 from ..spline import BSpline
 
@@ -111,9 +112,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
                 p = pts[i, k]
                 rows.append(plant_weight * (p - np.r_[ground[name], 0.0]))
                 if jacobian:
-                    fid = model.getFrameId(FRAMES[name])
-                    Jf = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
-                    Jp = Jf[:3] - pin.skew(p - d.oMf[fid].translation) @ Jf[3:]
+                    Jp = point_jacobian(model, d, model.getFrameId(FRAMES[name]), p)
                     dp_base = np.column_stack([[1, 0, 0], [0, 0, 1], np.cross([0, 1, 0], p - q[:3])])
                     dp_leg = (Jp[:, 6:] @ E)[:, leg]
                     J.append(plant_weight * np.hstack([np.kron(dp_base, Bb[i]), np.kron(dp_leg, Br[i])]))

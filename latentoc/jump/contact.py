@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..dynamics import SymbolicModel
+from ..kinematics import point_jacobian
 from ..mocap.symmetry import SymmetryMap
 from .training import BALL, FOOT, TOE
 
@@ -157,10 +158,8 @@ def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootG
     left = foot_points(model, data, geom).T
     for side in "lr":
         for k, point in enumerate(POINTS):
-            fid = model.getFrameId(side + FRAMES[point][1:])
             p = left[k] if side == "l" else MIRROR @ left[k]
-            J = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
-            out[k] += J[:3] - pin.skew(p - data.oMf[fid].translation) @ J[3:]
+            out[k] += point_jacobian(model, data, model.getFrameId(side + FRAMES[point][1:]), p)
     return out
 
 

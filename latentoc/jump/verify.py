@@ -45,6 +45,7 @@ import numpy as np
 import pinocchio as pin
 
 from .contact import FRAMES, POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
+from ..kinematics import point_jacobian
 from ..support_polygon import feet_polygon
 from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
@@ -144,9 +145,7 @@ def _left_points(model: pin.Model, d: pin.Data, geom: FootGeometry, v: np.ndarra
     P = foot_points(model, d, geom).T
     V = np.zeros_like(P)
     for k, point in enumerate(POINTS):
-        fid = model.getFrameId(FRAMES[point])
-        J = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
-        V[k] = (J[:3] - pin.skew(P[k] - d.oMf[fid].translation) @ J[3:]) @ v
+        V[k] = point_jacobian(model, d, model.getFrameId(FRAMES[point]), P[k]) @ v
     return P, V
 
 

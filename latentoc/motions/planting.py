@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import LatentocError
+from ..kinematics import point_jacobian
 
 __all__ = ["Plant", "PlantingError", "plant", "taper"]
 
@@ -73,9 +74,8 @@ def plant(model: pin.Model, Q: np.ndarray, free_v: np.ndarray, plants: list[Plan
                 if p.point is not None:  # the point's world position, its Jacobian in world axes
                     Mf = d.oMf[fid]
                     x = Mf.translation + Mf.rotation @ p.point
-                    J = pin.getFrameJacobian(model, d, fid, pin.LOCAL_WORLD_ALIGNED)
                     errs.append(x - p.placement.translation)
-                    jacs.append((J[:3] - pin.skew(x - Mf.translation) @ J[3:])[:, cols])
+                    jacs.append(point_jacobian(model, d, fid, x)[:, cols])
                     continue
                 M = p.placement.actInv(d.oMf[fid])
                 errs.append(pin.log6(M).vector)

@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import LatentocError
+from ..kinematics import point_jacobian
 
 __all__ = ["Keypoint", "Retargeted", "RetargetError", "retarget", "frame_id", "chain_scale", "resting"]
 
@@ -206,9 +207,7 @@ class _Frame:
         rows = []
         for k, f in enumerate(self.fids):
             M = self.data.oMf[f]
-            J = pin.getFrameJacobian(m, self.data, f, pin.LOCAL_WORLD_ALIGNED)
-            r = M.rotation @ self.offsets[k]
-            Jp = (J[:3] - pin.skew(r) @ J[3:]) @ Jint  # the point's velocity: v - r x w
+            Jp = point_jacobian(m, self.data, f, M.act(self.offsets[k])) @ Jint
             rows.append(self.w[k] * Jp)
             Jl = pin.getFrameJacobian(m, self.data, f, pin.LOCAL)[3:]
             rows.append(self.wo[k] * pin.Jlog3(self.R[k].T @ M.rotation) @ Jl @ Jint)
