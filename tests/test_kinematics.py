@@ -28,3 +28,20 @@ def test_point_jacobian_is_the_points_velocity():
     pin.computeJointJacobians(g, d, q)
     pin.framesForwardKinematics(g, d, q)
     np.testing.assert_allclose(point_jacobian(g, d, fid, d.oMf[fid].act(offset)) @ v, fd, atol=1e-7)
+
+
+def test_runs_are_the_masks_stretches():
+    """latentoc.intervals.runs against a direct scan: every True run, its start and exclusive stop."""
+    from latentoc.intervals import runs
+
+    rng = np.random.default_rng(1)
+    for n in (0, 1, 7, 50):
+        mask = rng.random(n) < 0.5
+        expected, start = [], None
+        for i, m in enumerate(list(mask) + [False]):
+            if m and start is None:
+                start = i
+            elif not m and start is not None:
+                expected.append((start, i))
+                start = None
+        assert runs(mask) == expected

@@ -45,6 +45,7 @@ import numpy as np
 import pinocchio as pin
 
 from .contact import FRAMES, POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
+from ..intervals import runs
 from ..kinematics import point_jacobian
 from ..support_polygon import feet_polygon
 from .training import RIGHT_TOE, TOE
@@ -158,8 +159,7 @@ def contact_kinematics(t: np.ndarray, points: np.ndarray, velocity: np.ndarray, 
     travel = travel_x = height = 0.0
     for k in range(points.shape[1]):
         on = loaded[:, k]
-        for a in np.flatnonzero(on & ~np.concatenate([[False], on[:-1]])):  # each loaded stretch's start
-            b = a + int(np.argmin(on[a:])) if not on[a:].all() else len(on)
+        for a, b in runs(on):  # each loaded stretch
             d = points[a:b, k, :2] - points[a, k, :2]
             travel = max(travel, float(np.max(np.linalg.norm(d, axis=1))))
             travel_x = max(travel_x, float(np.max(np.abs(d[:, 0]))))

@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import LatentocError
+from ..intervals import runs
 from ..kinematics import point_jacobian
 
 __all__ = ["Keypoint", "Retargeted", "RetargetError", "retarget", "frame_id", "chain_scale", "resting"]
@@ -103,16 +104,11 @@ def resting(p: np.ndarray, t: np.ndarray, rise: float, speed: float) -> np.ndarr
     ``speed`` horizontally (central differences); breaks shorter than ``GAP`` are closed."""
     v = np.gradient(p[:, :2], t, axis=0)
     on = (p[:, 2] - p[:, 2].min() <= rise) & (np.linalg.norm(v, axis=1) <= speed)
-    runs = _stretches(on)
-    for (_, b), (a, _) in zip(runs, runs[1:]):
+    stretches = runs(on)
+    for (_, b), (a, _) in zip(stretches, stretches[1:]):
         if t[a] - t[b - 1] <= GAP + 1e-9:
             on[b:a] = True
     return on
-
-
-def _stretches(on: np.ndarray) -> list[tuple[int, int]]:
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(int), [0]])))
-    return list(zip(edges[::2], edges[1::2]))
 
 
 def _yaw(R: np.ndarray) -> float:
@@ -166,7 +162,7 @@ def _targets(source: pin.Model, Q_src: np.ndarray, t: np.ndarray, keypoints: lis
             continue
         P[:, k, 2] = kp.height + np.maximum(scale * (S[:, k, 2] - p_rest[k, 2]), 0.0)  # never into the ground
         on = resting(P[:, k], t, rise * scale, speed * scale)
-        for a, b in _stretches(on):
+        for a, b in runs(on):
             P[a:b, k, :2] = P[a:b, k, :2].mean(axis=0)
             P[a:b, k, 2] = kp.height
             yaw = float(np.mean([_yaw(Ri @ rest_tgt[k].rotation.T) for Ri in R[a:b, k]]))

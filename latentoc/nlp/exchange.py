@@ -13,6 +13,7 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 
+from ..intervals import runs
 from .ipopt import IpoptResult
 
 __all__ = ["TUBE_TOL", "Exchange", "worst_times", "exchange_rounds"]
@@ -28,9 +29,8 @@ def worst_times(slack: np.ndarray, below: np.ndarray, spacing: int = 0, neighbou
     ``spacing``-th sample of the grid in the run (a bound that holds along a stretch is held along
     it); a run shorter than ``spacing`` also its ``neighbours``-th neighbours either side (the bound
     moves a little when the solve resumes)."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], np.asarray(below, np.int8), [0]])))
     out = []
-    for a, b in zip(edges[::2], edges[1::2]):
+    for a, b in runs(below):
         k = a + int(np.nanargmin(slack[a:b]))
         out.append(np.array([k]))
         if spacing:

@@ -20,6 +20,7 @@ import pinocchio as pin
 from matplotlib.figure import Figure
 from scipy.spatial import ConvexHull, QhullError
 
+from ..intervals import runs
 from ..support_polygon import margin, support_polygon
 from .feet import ContactPoints, contact_points_of
 from .figure import LIMIT_STYLE, new_figure, panel_axes
@@ -112,8 +113,7 @@ def contact_series(model: pin.Model, traj: Mapping[str, Any]) -> dict[str, Any]:
 
 def _shade(ax: Any, t: np.ndarray, mask: np.ndarray, label: str | None) -> None:
     """Shade the time spans where ``mask`` holds."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
-    for k, (a, b) in enumerate(zip(edges[::2], edges[1::2])):
+    for k, (a, b) in enumerate(runs(mask)):
         ax.axvspan(t[a], t[b - 1], color="0.85", zorder=0, label=label if k == 0 else None)
 
 
