@@ -35,7 +35,7 @@ def jump_parts(jump_setup):
 
 @pytest.fixture(scope="session")
 def small_jump(jump_parts):
-    """A broad-jump NLP with few nodes and every row family (phase 2: distance; every node row,
+    """A broad-jump NLP with few nodes and every row family (phase 2: distance; sticking contacts; every node row,
     contact samples every 50 ms and flight samples every 50 ms with every torque row, the tube) and
     its training start (:func:`latentoc.jump.start.initial_point`)."""
     import numpy as np
@@ -47,7 +47,7 @@ def small_jump(jump_parts):
 
     p = jump_parts
     js = p.js
-    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05)
+    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05, sticking=True)
     ph, nk = js.phases, p.robot.unmirrored.size
     tc = contact_sample_grid(settings, ph)
     tf = np.round(np.arange(ph.takeoff + 0.02, ph.touchdown - 0.01, 0.05), 3)

@@ -28,9 +28,10 @@ def test_no_stretch_no_sample():
 
 
 @pytest.mark.parametrize("kind, unit", [("torque", TOLERANCE.torque), ("cop", TOLERANCE.cop),
-                                        ("zmp", TOLERANCE.polygon), ("tube", TOLERANCE.tube)])
+                                        ("zmp", TOLERANCE.polygon), ("tube", TOLERANCE.tube),
+                                        ("placement", TOLERANCE.placement), ("dynamics", TOLERANCE.dynamics)])
 def test_violated_beyond_the_tolerance_only(kind, unit):
-    held = {k: 0.0 for k in ("torque", "normal", "friction", "point_cone", "cop", "zmp", "com", "tube")}
+    held = {k: 0.0 for k in ("torque", "normal", "friction", "point_cone", "cop", "zmp", "com", "tube", "placement", "dynamics")}
     assert not violated({**held, kind: 0.9 * unit}) and violated({**held, kind: 1.1 * unit})
 
 
@@ -50,3 +51,39 @@ def test_selections_merge_by_time_and_row():
     assert m.merged(a).rows() == m.rows() and len(m.merged(b).contact) == 3
     with pytest.raises(ValueError, match="2 rows for 1 contact samples"):
         Selection(np.zeros((2, 3)), np.zeros((2, 8)), [0.1], np.zeros((2, 3)), np.zeros((1, 8)), [], np.zeros((0, 3)), [])
+
+
+def test_placement_on_the_1khz_grid_is_the_placement_rows_slack(small_jump):
+    """The 1 kHz placement slack (latentoc.jump.exchange.placement, numeric Pinocchio on the export)
+    equals, at every contact sample, the slack of that sample's placement rows in the NLP (CasADi),
+    column by column; it is NaN in flight and where a row does not apply."""
+    from latentoc.jump.exchange import placement
+    from latentoc.jump.export import trajectory
+    from latentoc.jump.verify import series
+
+    sj = small_jump
+    jn, ph, x = sj.nlp, sj.js.phases, np.asarray(sj.x0, float)
+    traj = trajectory(sj.robot, sj.layer, ph, jn, x)
+    sr = series(sj.js.model, traj, sj.robot.mu)
+    x_L = float(jn.variables.unpack(x)["x_L"][0])
+    slack = placement(sr, traj, x_L, sj.robot, ph, sj.settings)
+    t = np.asarray(traj["t"])
+    assert np.isnan(slack[~np.asarray(traj["contact"]).astype(bool)]).all()
+    g = jn.nlp.constraints(x)
+    rows = np.minimum(g - jn.lbg, jn.ubg - g)
+    names, times, comps = jn.row_names, jn.row_times, jn.row_components
+    column = {("toe_position", 0): 0, ("toe_position", 1): 1, ("heel_height", 0): 2, ("ball_height", 0): 3,
+              ("point_y", 2): 4, ("point_y", 0): 5, ("point_y", 1): 5, ("point_y", 3): 5, ("pad_height", 0): 6}
+    checked = 0
+    for tk in jn.selection.contact:
+        i = int(np.argmin(np.abs(t - tk)))
+        assert abs(t[i] - tk) < 1e-9
+        at = np.isclose(times, tk, atol=1e-12)
+        seen = set()
+        for r in np.flatnonzero(at & np.isin(names, ["toe_position", "heel_height", "ball_height", "point_y", "pad_height"])):
+            c = column[(names[r], int(comps[r]))]
+            np.testing.assert_allclose(slack[i, c], rows[r], atol=1e-9)
+            seen.add(c)
+            checked += 1
+        assert np.isnan(slack[i, sorted(set(range(7)) - seen)]).all()  # no row there, no slack
+    assert checked > 0

@@ -141,8 +141,19 @@ def test_row_and_variable_bounds(small_jump):
     np.testing.assert_allclose(lbg[sel] * scale[comps[sel]], lo[act][comps[sel]] + TORQUE_BACKOFF, rtol=1e-12)
     np.testing.assert_allclose(ubg[sel] * scale[comps[sel]], hi[act][comps[sel]] - TORQUE_BACKOFF, rtol=1e-12)
     t = jn.row_times
+    n_held = 12 + len(jn.selection.contact)  # the feet held at the contact nodes and samples
     for part in ("heel_height", "ball_height"):
-        assert (names == part).sum() == 12  # at the contact nodes only
+        assert (names == part).sum() == n_held
+    # the pad's height while the ball is off the ground (the toes flat), bounded as a loaded point;
+    # a held point's y within the contact tolerance
+    pad = names == "pad_height"
+    assert pad.any() and not ph.loaded("ball", t[pad]).any() and ph.loaded("pad", t[pad]).all()
+    np.testing.assert_array_equal(lbg[pad], -s.contact_tolerance)
+    np.testing.assert_array_equal(ubg[pad], s.contact_tolerance)
+    side = names == "point_y"
+    assert (side & (comps == 2)).sum() == n_held  # the toe tip's at every node and sample
+    np.testing.assert_array_equal(lbg[side], -s.contact_tolerance)
+    np.testing.assert_array_equal(ubg[side], s.contact_tolerance)
     heel, ball = ph.loaded("heel", t[names == "heel_height"]), ph.loaded("ball", t[names == "ball_height"])
     ct = s.contact_tolerance
     np.testing.assert_array_equal(lbg[names == "heel_height"], -ct)
@@ -162,7 +173,7 @@ def test_row_and_variable_bounds(small_jump):
                  "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "flight_clearance": (0, np.inf),
                  "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf),
                  "cop_pad": (0, np.inf)}
-    assert set(one_sided) | {"torque", "heel_height", "ball_height"} == set(names)
+    assert set(one_sided) | {"torque", "heel_height", "ball_height", "pad_height", "point_y"} == set(names)
     for part, (a, b) in one_sided.items():
         assert np.all(lbg[names == part] == a) and np.all(ubg[names == part] == b), part
     var = jn.variables

@@ -201,6 +201,7 @@ def test_plant_training_learns_and_limits_the_planted_jump():
     np.testing.assert_allclose(js.training.Y, planted.training.Y, atol=0)
     np.testing.assert_allclose(js.gpdm.Y, planted.training.Y[::3], atol=0)
     assert js.planted is not None and js.planted.change_deg == planted.change_deg
-    assert 10 < js.planted.change_deg["ltoes_rx"] < 20  # the toe joint changes most (about 15 deg)
+    ch = js.planted.change_deg  # the toe joint takes the foot's rise over the flat toes: it changes most
+    assert max(ch, key=ch.__getitem__) == "ltoes_rx" and ch["ltoes_rx"] > 10
     lim = js.limits
     assert np.all(lim.tau <= lim.tau_max + 1e-9) and np.all(lim.tau >= lim.tau_min - 1e-9)

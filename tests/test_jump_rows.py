@@ -53,8 +53,8 @@ def state_at(sj, parts, t):
 def _contact_family_against_pinocchio(sj, family_name: str, times: np.ndarray, block: str, x_pin) -> None:
     """A contact family's rows (nodes or samples) at random edge weights against numeric Pinocchio:
     base rows = rnea's minus sum J^T f (body weights), torques over their range, the centre of
-    pressure on the ground in the loaded support, the toe tip's offset and the heel and ball heights
-    (nodes), the COM in the feet's polygon once settled; with balanced edge weights the ZMP rows are
+    pressure on the ground in the loaded support, where the foot is (the toe tip's offset, the heel,
+    ball and unloaded pad heights, the loaded points' sideways offsets), the COM in the feet's polygon once settled; with balanced edge weights the ZMP rows are
     the normal force times the polygon rows of the ZMP of the centroidal momentum rate on the ground."""
     model, js, robot = sj.js.model, sj.js, sj.robot
     data = model.createData()
@@ -88,10 +88,20 @@ def _contact_family_against_pinocchio(sj, family_name: str, times: np.ndarray, b
         rear = heel[0] if ph.loaded("heel", np.array([t]))[0] else ball[0] if ph.loaded("ball", np.array([t]))[0] \
             else toe[0] - TOE_PAD
         np.testing.assert_allclose(back, (toe[0] - rear) * fz - my0, atol=1e-10)
-        if x_pin is not None:
-            np.testing.assert_allclose(g[at & (names == "toe_position")], [toe[0] - x_pin(k), toe[2]], atol=1e-10)
-            np.testing.assert_allclose([g[at & (names == "heel_height")][0], g[at & (names == "ball_height")][0]],
-                                       [heel[2], ball[2]], atol=1e-10)
+        # heights above the standing ones, sideways offsets from them (the standing frame, numeric)
+        d0 = model.createData()
+        fp = foot_points(model, d0, js.training.Q[0], js.geom).T
+        np.testing.assert_allclose(g[at & (names == "toe_position")], [toe[0] - x_pin(k), toe[2] - fp[2, 2]], atol=1e-10)
+        np.testing.assert_allclose([g[at & (names == "heel_height")][0], g[at & (names == "ball_height")][0]],
+                                   [heel[2] - fp[0, 2], ball[2] - fp[1, 2]], atol=1e-10)
+        # one row per held degree of freedom: the toe tip's y and the rearmost loaded point's (heel,
+        # ball or pad); the pad's height while the ball is off the ground (the toes flat)
+        on = {p: ph.loaded(p, np.array([t]))[0] for p in ("heel", "ball", "pad")}
+        side = at & (names == "point_y")
+        rear = next(i for i, p in ((0, "heel"), (1, "ball"), (3, "pad")) if on[p])
+        assert sorted(comps[side]) == sorted([2, rear])
+        np.testing.assert_allclose(g[side], [(heel, ball, toe, pad)[c][1] - fp[c, 1] for c in comps[side]], atol=1e-10)
+        np.testing.assert_allclose(g[at & (names == "pad_height")], [] if on["ball"] else [pad[2] - fp[3, 2]], atol=1e-10)
         com_rows = at & (names == "com_polygon")
         if com_rows.any():
             assert t >= ph.settle - 1e-9
@@ -132,15 +142,16 @@ def test_contact_node_rows_match_numeric_pinocchio(small_jump):
 
 
 def test_contact_sample_rows_match_numeric_pinocchio(small_jump):
-    """The contact samples' rows (their own edge weights, no foot placement) against numeric
+    """The contact samples' rows (their own edge weights, the nodes' foot placement) against numeric
     Pinocchio, and their times: the packaged grid (every ``sample_spacing`` on the 1 kHz grid, at
     the splines' breakpoints and just inside each unloaded interval of the schedule), in contact,
     none within 1 ms of a node."""
     sj = small_jump
     jn, ph = sj.nlp, sj.js.phases
     tc = jn.selection.contact
-    _contact_family_against_pinocchio(sj, "contact_sample", tc, "lam_sample", None)
-    assert not np.isin(["toe_position", "heel_height", "ball_height"], jn.row_names[family(jn, "contact_sample")]).any()
+    x_L = jn.variables.unpack(sj.x0)["x_L"][0]
+    _contact_family_against_pinocchio(sj, "contact_sample", tc, "lam_sample",
+                                      lambda k: x_L if tc[k] >= ph.touchdown - 1e-9 else 0.0)
     nodes = np.concatenate([jn.grid["stance"], jn.grid["land"]])
     assert np.allclose(tc * 1000, np.round(tc * 1000)) and np.all(np.diff(tc) > 0)
     assert np.min(np.abs(tc[:, None] - nodes[None]), axis=1).min() > 1e-3 - 1e-9

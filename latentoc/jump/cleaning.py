@@ -3,12 +3,13 @@
 The captured toes move by about a centimetre in stance (and 3 cm sideways), and the toe tip sinks
 1.4 cm into the floor at the push-off, so a model that learns the capture learns feet that slide.
 The contact model of the NLP (:mod:`.contact`, :class:`.phases.Phases`) holds the toes flat on
-their ground point, the foot flat while the heel is loaded, and lets the toes roll on the toe
-point alone between the ball's rise and the takeoff (and from the touchdown to the ball's strike);
-:func:`planted_training` makes the demonstration obey the same: the left toes body sits at its
-standing placement in the stance (at the standing orientation over the captured landing point in
-the landing) while it lies flat, only its toe point stays there while it rolls, and while the heel
-is loaded the toe joint holds its standing angle, approached smoothly over ``TOE_RAMP``. Only the left leg's seven joints change (the right is their mirror) and,
+their ground points, and the foot flat while the heel is loaded; :func:`planted_training` makes
+the demonstration obey the same: the left toes body sits at its standing placement through the
+stance (at the standing orientation over the captured landing point through the landing), so the
+foot rises about the toe joint while the toes stay flat, as a foot's toes do at push-off, and
+while the heel is loaded the toe joint holds its standing angle, approached smoothly over
+``TOE_RAMP``. (Toes rolling on their tip alone, as captured, leave a point contact that holds no
+moment: docs/broad-jump.md.) Only the left leg's seven joints change (the right is their mirror) and,
 where the leg cannot reach, the sagittal base; each frame changes them least (:func:`latentoc.motions.planting.plant`);
 the correction fades out over ``TAPER`` into the flight.
 """
@@ -22,7 +23,7 @@ import pinocchio as pin
 from ..mocap.symmetry import SymmetryMap
 from ..motions.planting import Plant, plant, taper
 from .base import base_to_freeflyer, freeflyer_to_base
-from .contact import POINTS, FootGeometry, foot_points
+from .contact import FootGeometry
 from .phases import Phases
 from .training import JumpTraining
 
@@ -85,20 +86,13 @@ def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phas
     iq = model.joints[jid].idx_q
     flat = phases.flat(t) & (stance | landing)
     contact = stance | landing
-    rolling = phases.pivot(t) & contact
-    pin.framesForwardKinematics(model, d, Q[0])
-    toe = foot_points(model, d, geom)[:, POINTS.index("toe")]  # standing, on the ground
-    toe_local = standing.actInv(toe)
-    toe_landed = toe + on_ground.translation - standing.translation
     theta = _ramped(Q[:, iq], float(Q[0, iq]), flat, t)
     held = contact & (np.abs(t[:, None] - t[flat][None, :]).min(axis=1) < TOE_RAMP)
     legs_v = [model.joints[model.getJointId(n)].idx_v for n in LEG_JOINTS]
     free_v = np.array(list(SAGITTAL_BASE_V) + legs_v)
     weights = np.concatenate([BASE_WEIGHTS, np.ones(len(legs_v))])
     iv = model.joints[jid].idx_v
-    plants = [Plant(ANCHOR, standing, stance & ~rolling), Plant(ANCHOR, on_ground, landing & ~rolling),
-              Plant(ANCHOR, pin.SE3(np.eye(3), toe), stance & rolling, toe_local),
-              Plant(ANCHOR, pin.SE3(np.eye(3), toe_landed), landing & rolling, toe_local)]
+    plants = [Plant(ANCHOR, standing, stance), Plant(ANCHOR, on_ground, landing)]
     Qp = plant(model, Q, free_v, plants, {iv: (theta, held)}, weights)
     Y0, legs = tr.Y, [smap.learned_names.index(n) for n in LEG_JOINTS]
     dY = np.zeros_like(Y0)

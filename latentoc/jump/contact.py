@@ -3,7 +3,8 @@
 Contact points of the left foot (the right one is its mirror image):
 
 * ``ball`` - the end of the foot bone (frame ``lfoot_end``);
-* ``toe`` - the end of the toes bone (frame ``ltoes_end``);
+* ``toe`` - the end of the toes bone (frame ``ltoes_end``; ~1 mm above the others standing: the
+  contact rows hold each point's height above its standing one);
 * ``heel`` - a point fixed in the foot body (frame ``lfoot``, at the ankle): the ankle
   dropped vertically to the ground in the first (standing) training frame;
 * ``pad`` - a point fixed in the toes body ``TOE_PAD`` behind the toe tip on the ground when
@@ -14,13 +15,11 @@ In contact (stance and landing) the toe tip stays near its ground point ``(x_pin
 (the contact rows, :mod:`.rows.contact`): the captured push-off rolls over it (the ball
 rises ~8 cm before takeoff while the toe tip stays down) and the landing is toe-first.
 
-Contact forces: three points per foot (heel, ball, toe), each with a 2-D friction
-pyramid written with its two edge generators ``lam1 (mu, 1) + lam2 (-mu, 1)``,
-``lam >= 0``.  In the sagittal plane this pyramid *is* the exact cone ``|fx| <= mu fz``;
-lateral forces are zero by symmetry.  Unilateral forces and the centre of pressure
-inside the foot (between heel and toe) follow from ``lam >= 0``.  The heel and ball can
-push only when they are on the ground, by the training motion's contact schedule
-(:mod:`.phases`).
+Contact forces: four points per foot, each with a 2-D friction pyramid written with its two edge
+generators ``lam1 (mu, 1) + lam2 (-mu, 1)``, ``lam >= 0``.  In the sagittal plane this pyramid *is*
+the exact cone ``|fx| <= mu fz``; lateral forces are zero by symmetry.  Unilateral forces and the
+centre of pressure inside the foot follow from ``lam >= 0``.  The heel and ball can push only when
+they are on the ground, by the training motion's contact schedule (:mod:`.phases`).
 """
 from __future__ import annotations
 
@@ -58,6 +57,7 @@ class FootGeometry:
 
     heel_offset: np.ndarray
     pad_offset: np.ndarray
+    footprint: np.ndarray | None = None  # world heel, ball, toe, pad standing (3 x 4)
 
     @classmethod
     def from_standing(cls, model: pin.Model, q_stand: np.ndarray) -> "FootGeometry":
@@ -69,7 +69,9 @@ class FootGeometry:
         heel[2] = ground
         T = d.oMf[model.getFrameId(TOE)]
         pad = T.translation + np.array([-TOE_PAD, 0.0, ground - T.translation[2]])
-        return cls(M.rotation.T @ (heel - M.translation), T.rotation.T @ (pad - T.translation))
+        geom = cls(M.rotation.T @ (heel - M.translation), T.rotation.T @ (pad - T.translation))
+        geom.footprint = foot_points(model, d, geom)
+        return geom
 
 
 def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:

@@ -205,6 +205,12 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: 
     loaded = ph.loaded("ball", times[ball])
     lbg[ball] = np.where(loaded, -s.contact_tolerance, -s.ball_tolerance)
     ubg[ball] = np.where(loaded, s.contact_tolerance, np.inf)
+    pad = names == "pad_height"  # as the ball's; a held point's y within the tolerance of its ground point
+    loaded = ph.loaded("pad", times[pad])
+    lbg[pad] = np.where(loaded, -s.contact_tolerance, -s.ball_tolerance)
+    ubg[pad] = np.where(loaded, s.contact_tolerance, np.inf)
+    side = names == "point_y"
+    lbg[side], ubg[side] = -s.contact_tolerance, s.contact_tolerance
     return lbg, ubg
 
 

@@ -21,6 +21,7 @@ class JumpSettings:
     foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact
     ball_tolerance: float = 0.02  # m an unloaded ball may sink below the ground (soft sole)
     contact_tolerance: float = 0.01  # m a loaded heel or ball stays within this of the ground
+    sticking: bool = False  # loaded points held at the samples too, and sideways (:mod:`.rows.contact`)
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     tube_spacing: float = 0.005  # s between tube points
     sample_spacing: float = 0.005  # s between the contact and flight samples of phase 2 (0: none)
@@ -45,6 +46,7 @@ FIELD_DOCS: dict[str, str] = {
     'foot_tolerance': 'm the toe tip may move from its ground point in contact',
     'ball_tolerance': 'm an unloaded ball may sink below the ground (soft sole)',
     'contact_tolerance': 'm a loaded heel or ball stays within this of the ground',
+    'sticking': 'loaded points held at the contact samples too, and sideways',
     'flight_substeps': 'trapezoid steps of the pitch rate per flight node interval',
     'tube_spacing': "s between the tube's points",
     'sample_spacing': 's between the contact and flight samples of phase 2 (0: none)',

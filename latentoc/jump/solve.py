@@ -129,7 +129,7 @@ class _Solve:
         if not s.two_phase:
             return full, x, None
         traj, sr = self.check(full, x)
-        seed = exchange.seed_selection(full, x, traj, sr, self.robot, self.ph, s.tube, self.tube)
+        seed = exchange.seed_selection(full, x, traj, sr, self.robot, self.ph, s, self.tube)
         nodes = full.selection
         first = nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
                                        seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
@@ -154,11 +154,12 @@ class _Solve:
 
         def check(nlp: JumpNLP, run: ipopt.IpoptResult) -> tuple[Selection | None, dict[str, float]]:
             traj, sr = self.check(nlp, run.x)
-            worst = exchange.violations(sr, traj, s.tube, self.robot.weight)
+            place = (exchange.placement(sr, traj, float(nlp.variables.unpack(run.x)["x_L"][0]), self.robot, ph, s)
+                     if s.sticking else None)
+            worst = exchange.violations(sr, traj, s.tube, self.robot.weight, place)
             if not exchange.violated(worst):
                 return None, worst
-            more = nlp.selection.merged(exchange.chosen_rows(nlp, run.x, traj, sr, self.robot, ph, s.tube,
-                                                             exchange.NEAR))
+            more = nlp.selection.merged(exchange.chosen_rows(nlp, run.x, traj, sr, self.robot, ph, s, exchange.NEAR))
             grown = more.rows() > nlp.selection.rows() or len(more.contact) > len(nlp.selection.contact)
             return (more if grown else None), worst  # nothing new: the rows hold to Ipopt's tolerance
 

@@ -2,8 +2,9 @@
 
 Inputs r: the base (b, bd, bdd) of the contact phase's own (x, z, pitch) spline, the toe tip's
 ground point x_pin, and the friction-pyramid edge weights lam (heel, ball, toe, pad; body weights).
-Rows: the sagittal base rows of RNEA minus sum J^T f (body weights), the joint torques, the
-toe tip's offset from its ground point, the heel and ball heights, the centre of pressure on
+Rows: the sagittal base rows of RNEA minus sum J^T f (body weights), the joint torques, where
+the foot is (:func:`_placement_at`: the toe tip on its ground point, the heel, ball and pad heights,
+the loaded points' sideways offsets), the centre of pressure on
 the ground within the loaded support, the ZMP in the support polygon (both homogeneous in the
 normal force, smooth as fz -> 0) and the projected COM in it.
 """
@@ -47,12 +48,17 @@ def block(robot: JumpRobot, d: int) -> RobotBlock:
     fx, fz = w[0], w[2]
     my = w[4] + P[2, 2] * fx  # about the ground point below the toe tip: CoP x = toe_x - my / fz
     heel, toe = P[:2, 0], P[:2, 2]
+    fp = robot.geom.footprint
+    assert fp is not None, "the contact rows need the standing footprint (FootGeometry.from_standing)"
     parts = {
         "dynamics": (tau - gen)[SAGITTAL_ROWS] / W,
         "torque": robot.torque_rows((tau - gen)[6:]),
-        "ball_height": P[2, 1],
-        "toe_position": ca.vertcat(P[0, 2] - u["x_pin"], P[2, 2]),
-        "heel_height": P[2, 0],
+        # heights above each point's standing height (the toe tip stands ~1 mm above the others)
+        "ball_height": P[2, 1] - float(fp[2, 1]),
+        "toe_position": ca.vertcat(P[0, 2] - u["x_pin"], P[2, 2] - float(fp[2, 2])),
+        "heel_height": P[2, 0] - float(fp[2, 0]),
+        "pad_height": P[2, 3] - float(fp[2, 3]),
+        "point_y": ca.vertcat(*[P[1, k] - float(fp[1, k]) for k in range(4)]),  # heel, ball, toe, pad sideways
         # the centre of pressure on the ground between the rearmost loaded point and the toe tip
         # (homogeneous in fz, >= 0): cop_front, and cop_heel / cop_ball / cop_pad by the schedule
         "cop_front": my,
@@ -85,6 +91,23 @@ def _rows_at(rows: Rows, w: Wiring, k: int, t: float, torque: np.ndarray, polygo
             rows.add(k, "com_polygon", subset=np.flatnonzero(com))
 
 
+def _placement_at(rows: Rows, w: Wiring, k: int, t: float) -> None:
+    """Where the foot is: the toe tip on its ground point (x, z), the heel and ball heights (bounds
+    by the schedule). With ``sticking`` one row more per degree of freedom the loaded points hold
+    (none redundant): while the ball is off the ground the pad's height (the toes lie flat on tip
+    and pad); the toe tip's and the rearmost loaded point's sideways offsets (the foot's or the toes'
+    yaw)."""
+    on = {p: bool(w.phases.loaded(p, np.array([t]))[0]) for p in ("heel", "ball", "pad")}
+    for part in ("ball_height", "toe_position", "heel_height"):
+        rows.add(k, part)
+    if not w.settings.sticking:
+        return
+    if not on["ball"]:
+        rows.add(k, "pad_height")
+    rear = next((i for i, p in ((0, "heel"), (1, "ball"), (3, "pad")) if on[p]), None)
+    rows.add(k, "point_y", subset=np.array([2] + ([rear] if rear is not None else [])))
+
+
 def wire_nodes(w: Wiring) -> None:
     """The contact nodes: their own edge weights, the toe tip's ground point (the stance's at 0, the
     landing's the jump distance x_L), the feet's placement and the chosen rows."""
@@ -98,22 +121,25 @@ def wire_nodes(w: Wiring) -> None:
     rows = Rows(w.blocks["contact"])
     for k, t in enumerate(tc):
         _rows_at(rows, w, k, t, sel.node_torque[k], sel.node_polygon[k])
-        for part in ("ball_height", "toe_position", "heel_height"):
-            rows.add(k, part)
+        _placement_at(rows, w, k, t)
     w.add("contact", ni, rows, tc)
 
 
 def wire_samples(w: Wiring) -> None:
-    """The contact samples: the same block with their own edge weights, no foot placement."""
+    """The contact samples: the same block with their own edge weights; with ``sticking`` the nodes'
+    foot placement (the feet held between the nodes)."""
     sel = w.selection
     if not len(sel.contact):
         return
     ni = w.inputs(len(sel.contact))
     w.latent(ni, sel.contact)
     w.base(ni, sel.contact)
-    ni.constant(np.zeros((len(sel.contact), 1)))  # the toe tip's ground point: no placement rows here
+    land = sel.contact >= w.phases.touchdown - 1e-9  # the toe tip's ground point: 0, or x_L in the landing
+    ni.variables(np.where(land, w.variables.index("x_L")[0], -1).astype(np.int64)[:, None])
     ni.variables(w.variables.index("lam_sample"))
     rows = Rows(w.blocks["contact"])
     for k, t in enumerate(sel.contact):
         _rows_at(rows, w, k, t, sel.contact_torque[k], sel.contact_polygon[k])
+        if w.settings.sticking:  # the feet held between the nodes too
+            _placement_at(rows, w, k, t)
     w.add("contact_sample", ni, rows, sel.contact)
