@@ -9,6 +9,10 @@
   each free control point stays within +-k degrees of that fit (Table 2's "joint range"), and the
   centre joints that flip sign under the mirror stay zero (a symmetric motion has none). No tube.
 
+With ``[options] leg_residual`` (deg) the latent path carries a residual beside it: the path is
+(x, r), the left leg's learned joints are the GP mean's plus r (:class:`~latentoc.latent.residual_layer.ResidualLayer`),
+each free control point of r within +-leg_residual of zero, the tube on x alone.
+
 Every other row of the jump (contact, flight, ZMP, COM, torque limits, friction) is the same NLP.
 """
 from __future__ import annotations
@@ -17,9 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..gpdm import GPDM
 from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.residual_layer import ResidualLayer
 
-__all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path"]
+__all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path", "leg_residual_path"]
 
 METHODS = ("latent", "joint-range")
 
@@ -30,7 +36,7 @@ class JumpPath:
     half-widths of the free control points' bounds around them (None: unbounded)."""
 
     method: str
-    layer: GPLayer | IdentityLayer
+    layer: GPLayer | IdentityLayer  # a ResidualLayer is a GPLayer
     P: np.ndarray  # (n_control x d)
     P_range: np.ndarray | None = None  # (n_control - 2 x d)
 
@@ -53,3 +59,12 @@ def joint_range_path(P_joint: np.ndarray, joint_range_deg: float, fixed: np.ndar
     half = np.full((P.shape[0] - 2, P.shape[1]), np.radians(joint_range_deg))
     half[:, np.asarray(fixed, int)] = 0.0
     return JumpPath("joint-range", IdentityLayer(P.shape[1]), P, half)
+
+
+def leg_residual_path(gpdm: GPDM, P: np.ndarray, joints: list[int], bound_deg: float) -> JumpPath:
+    """The latent spline from the training fit's control points P with a residual on the learned
+    joints ``joints``, zero at the start, its free control points within +-``bound_deg``."""
+    P = np.asarray(P, float)
+    r = len(joints)
+    half = np.hstack([np.full((P.shape[0] - 2, P.shape[1]), np.inf), np.full((P.shape[0] - 2, r), np.radians(bound_deg))])
+    return JumpPath("latent", ResidualLayer(gpdm, np.asarray(joints, int)), np.hstack([P, np.zeros((P.shape[0], r))]), half)

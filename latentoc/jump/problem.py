@@ -29,9 +29,9 @@ from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, li
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, tube_delta
 from .base import base_to_freeflyer
-from .cleaning import PlantedTraining, plantable, planted_training
+from .cleaning import LEG_JOINTS, PlantedTraining, plantable, planted_training
 from .contact import POINTS, FootGeometry, foot_points
-from .path import METHODS, joint_range_path, latent_path
+from .path import METHODS, joint_range_path, latent_path, leg_residual_path
 from .phases import Phases, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
@@ -173,7 +173,7 @@ RANGES: dict[str, tuple[float | None, float | None, bool]] = {
     "n_base_stance": (4, None, False), "n_base_land": (4, None, False), "foot_tolerance": (0.0, None, False),
     "ball_tolerance": (0.0, None, False), "contact_tolerance": (0.0, None, False), "flight_substeps": (1, None, False),
     "tube_spacing": (0.0, None, True), "sample_spacing": (0.0, None, False),
-    "exchange_rounds": (1, None, False)}
+    "exchange_rounds": (1, None, False), "leg_residual": (0.0, None, False)}
 
 
 def _field_check(name: str, type_name: str) -> Check:
@@ -336,6 +336,9 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     gpdm_time = time.perf_counter() - t0
     path = latent_path(GPLayer(js.gpdm), js.init["P"]) if k is None else \
         joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
+    if k is None and o["leg_residual"] > 0:  # the left leg's learned joints get a bounded residual
+        path = leg_residual_path(js.gpdm, js.init["P"], [js.smap.learned_names.index(n) for n in LEG_JOINTS],
+                                 o["leg_residual"])
     delta = tube_delta(problem.tube, js.gpdm)
     s = settings_from_problem(problem, delta)
     robot = js.robot(s.mu)

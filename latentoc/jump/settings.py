@@ -21,6 +21,7 @@ class JumpSettings:
     foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact
     ball_tolerance: float = 0.02  # m an unloaded ball may sink below the ground (soft sole)
     contact_tolerance: float = 0.01  # m a loaded heel or ball stays within this of the ground
+    leg_residual: float = 0.0  # deg: a bounded residual on the left leg's learned joints beside the latent path (0: none)
     sticking: bool = False  # loaded points held at the samples too, and sideways (:mod:`.rows.contact`)
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     tube_spacing: float = 0.005  # s between tube points
@@ -46,6 +47,7 @@ FIELD_DOCS: dict[str, str] = {
     'foot_tolerance': 'm the toe tip may move from its ground point in contact',
     'ball_tolerance': 'm an unloaded ball may sink below the ground (soft sole)',
     'contact_tolerance': 'm a loaded heel or ball stays within this of the ground',
+    'leg_residual': "deg: a bounded residual on the left leg's learned joints beside the latent path (0: none)",
     'sticking': 'loaded points held at the contact samples too, and sideways',
     'flight_substeps': 'trapezoid steps of the pitch rate per flight node interval',
     'tube_spacing': "s between the tube's points",
