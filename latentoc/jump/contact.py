@@ -11,7 +11,7 @@ Contact points of the left foot (the right one is its mirror image):
   standing: the toes' contact patch, so that a foot on its toes alone can hold a moment (with
   the toe tip alone every base row of such a sample would ask the motion for none).
 
-In contact (stance and landing) the toe tip stays near its ground point ``(x_pin, z = 0)``
+In contact (stance and landing) the toe tip stays near its ground point ``x_pin`` at its standing height
 (the contact rows, :mod:`.rows.contact`): the captured push-off rolls over it (the ball
 rises ~8 cm before takeoff while the toe tip stays down) and the landing is toe-first.
 

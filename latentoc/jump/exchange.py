@@ -85,8 +85,8 @@ def placement(sr: dict[str, np.ndarray], traj: dict, x_L: float, robot: JumpRobo
         z = P[:, k, 2] - fp[2, k]
         out[:, c] = np.where(on[point], ct - np.abs(z), z + (ct if point == "heel" else bt))
     out[:, 4] = ct - np.abs(P[:, 2, 1] - fp[1, 2])
-    yaw = np.where(on["heel"], P[:, 0, 1] - fp[1, 0], np.where(on["ball"], P[:, 1, 1] - fp[1, 1],
-                                                                np.where(on["pad"], P[:, 3, 1] - fp[1, 3], np.nan)))
+    # the rearmost loaded point's sideways offset: the heel's, else the ball's, else the pad's
+    yaw = np.select([on["heel"], on["ball"], on["pad"]], [P[:, k, 1] - fp[1, k] for k in (0, 1, 3)], np.nan)
     out[:, 5] = ct - np.abs(yaw)
     pad = P[:, 3, 2] - fp[2, 3]
     out[:, 6] = np.where(on["ball"], np.nan, np.where(on["pad"], ct - np.abs(pad), pad + bt))
@@ -135,10 +135,12 @@ def _node_rows(nlp: JumpNLP, w: np.ndarray, robot: JumpRobot, phases: Phases, m:
     return torque, polygon
 
 
-def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], robot: JumpRobot,
-                phases: Phases, s: JumpSettings, m: Margins) -> Selection:
+def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray | None,
+                robot: JumpRobot, phases: Phases, s: JumpSettings, m: Margins) -> Selection:
     """The rows within the margins ``m`` of binding at ``w`` (module doc): the contact nodes' own
-    rows, and samples at the worst 1 kHz time of each stretch that comes that near."""
+    rows, and samples at the worst 1 kHz time of each stretch that comes that near; ``place``: the
+    foot placement's slack (:func:`placement`, None without sticking contacts)."""
+    delta = s.tube
     t = np.asarray(traj["t"])
     contact = np.asarray(traj["contact"]).astype(bool)
     inside = (t > 0) & (t < phases.duration)
@@ -162,9 +164,7 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
     poly_near = poly < m.polygon  # NaN: False
     for e in range(poly.shape[1]):
         picked_c.update(worst_times(poly[:, e], poly_near[:, e] & inside, every, nb).tolist())
-    delta = s.tube
-    if s.sticking:  # the feet between the samples: where a placement row is violated
-        place = placement(sr, traj, float(nlp.variables.unpack(w)["x_L"][0]), robot, phases, s)
+    if place is not None:  # the feet between the samples: where a placement row is violated
         for c in range(place.shape[1]):
             picked_c.update(worst_times(place[:, c], place[:, c] < m.placement, every, nb).tolist())
     kc = _allowed(np.array(sorted(picked_c), int), contact & inside)
@@ -177,11 +177,11 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
     return Selection(node_torque, node_polygon, t[kc], torque_near[kc], poly_near[kc], t[kf], torque_near[kf], t[kt])
 
 
-def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], robot: JumpRobot,
-                   phases: Phases, s: JumpSettings, tube: np.ndarray) -> Selection:
+def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray | None,
+                   robot: JumpRobot, phases: Phases, s: JumpSettings, tube: np.ndarray) -> Selection:
     """A phase's first selection: the rows within :data:`SEED` of binding at its start ``w``, and
     the tube at ``tube``."""
-    seed = chosen_rows(nlp, w, traj, sr, robot, phases, s, SEED)
+    seed = chosen_rows(nlp, w, traj, sr, place, robot, phases, s, SEED)
     return seed.merged(Selection.empty(seed.node_torque.shape[0], seed.n_joints, tube))
 
 

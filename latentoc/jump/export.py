@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import nnls
 
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import Layer
 from .base import base_to_freeflyer
 from .contact import EDGES, POINTS, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 from .flight import ballistic_base, flight_functions
@@ -28,7 +28,7 @@ __all__ = ["trajectory", "corrected_edge_weights"]
 SAGITTAL = [0, 2, 4]
 
 
-def trajectory(robot: JumpRobot, layer: GPLayer | IdentityLayer, phases: Phases, nlp: JumpNLP, w: np.ndarray,
+def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: np.ndarray,
                rate_hz: float = 1000.0) -> dict:
     """Arrays of solution ``w`` of ``nlp`` on a 1 kHz grid and at the contact nodes (module doc)."""
     ph = phases
@@ -39,7 +39,7 @@ def trajectory(robot: JumpRobot, layer: GPLayer | IdentityLayer, phases: Phases,
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
     X, Xd, Xdd = (sp_.evaluate(P, t, k) for k in range(3))
     m = layer.motion(np.hstack([X, Xd, Xdd]))
-    path = {"sigma2": layer.variance(X)[0], "latent": X} if isinstance(layer, GPLayer) else {}
+    path = {"sigma2": layer.variance(X)[0], "latent": X} if layer.has_tube else {}
     st, la = t <= ph.takeoff, t >= ph.touchdown
     fl = ~st & ~la
     B = [np.zeros((len(t), 3)) for _ in range(3)]

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import Layer
 from ..nlp.assemble import SparseNLP
 from ..nlp.blocks import RobotBlock
 from ..spline import BSpline
@@ -95,10 +95,10 @@ def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
             "land": np.linspace(ph.touchdown, ph.duration, s.n_land)}
 
 
-def tube_times(settings: JumpSettings, phases: Phases, layer: GPLayer | IdentityLayer) -> np.ndarray:
+def tube_times(settings: JumpSettings, phases: Phases, layer: Layer) -> np.ndarray:
     """The tube every ``tube_spacing`` inside the motion (its ends are the fixed end points); none on
     a joint path, which has no GPDM variance."""
-    if not isinstance(layer, GPLayer):
+    if not layer.has_tube:
         return np.zeros(0)
     T = phases.duration
     return np.linspace(0.0, T, max(2, int(round(T / settings.tube_spacing)) + 1))[1:-1]
@@ -133,7 +133,7 @@ def flight_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 
     return t[(t > ph.takeoff) & (t < ph.touchdown)]
 
 
-def build_nlp(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
+def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], phases: Phases,
               settings: JumpSettings, P_fixed: np.ndarray, objective: str = "distance",
               selection: Selection | None = None, P_range: np.ndarray | None = None) -> JumpNLP:
     """The NLP of one phase of the solve (module doc); ``P_fixed`` holds the spline's end points
@@ -150,7 +150,7 @@ def build_nlp(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str
     sel = Selection.every_node_row(nC, nk, tube_times(s, ph, layer)) if selection is None else selection
     if sel.node_torque.shape != (nC, nk):
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
-    if len(sel.tube) and not isinstance(layer, GPLayer):
+    if len(sel.tube) and not layer.has_tube:
         raise ValueError("the selection has tube points but the layer has no sigma^2 (a joint path)")
     splines = (BSpline(s.n_control, T), BSpline(s.n_base_stance, ph.takeoff), BSpline(s.n_base_land, T - ph.touchdown))
     var = JumpVariables.layout(s.n_control, layer.latent_dim, s.n_base_stance, s.n_base_land, nC, len(grid["flight"]),

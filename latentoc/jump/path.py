@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..gpdm import GPDM
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer, Layer
 from ..latent.residual_layer import ResidualLayer
 
 __all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path", "leg_residual_path"]
@@ -36,14 +36,14 @@ class JumpPath:
     half-widths of the free control points' bounds around them (None: unbounded)."""
 
     method: str
-    layer: GPLayer | IdentityLayer  # a ResidualLayer is a GPLayer
+    layer: Layer
     P: np.ndarray  # (n_control x d)
     P_range: np.ndarray | None = None  # (n_control - 2 x d)
 
     @property
     def has_tube(self) -> bool:
         """Whether the path carries the tube (Eq. 29): only the latent path has a sigma^2."""
-        return isinstance(self.layer, GPLayer)
+        return self.layer.has_tube
 
 
 def latent_path(layer: GPLayer, P: np.ndarray) -> JumpPath:
@@ -63,7 +63,7 @@ def joint_range_path(P_joint: np.ndarray, joint_range_deg: float, fixed: np.ndar
 
 def leg_residual_path(gpdm: GPDM, P: np.ndarray, joints: list[int], bound_deg: float) -> JumpPath:
     """The latent spline from the training fit's control points P with a residual on the learned
-    joints ``joints``, zero at the start, its free control points within +-``bound_deg``."""
+    joints ``joints``, zero at both ends, its free control points within +-``bound_deg``."""
     P = np.asarray(P, float)
     r = len(joints)
     half = np.hstack([np.full((P.shape[0] - 2, P.shape[1]), np.inf), np.full((P.shape[0] - 2, r), np.radians(bound_deg))])

@@ -21,7 +21,7 @@ from ..dynamics import SymbolicModel
 from ..mocap.symmetry import SymmetryMap
 from ..errors import ProblemError, SolveError
 from ..gpdm import GPDM, GPDMSettings, cached_gpdm
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import GPLayer, IdentityLayer, Layer
 from ..nlp.blocks import RobotBlock, compile_blocks
 from ..kind import Solution, joint_range
 from ..problem import Problem, apply_overrides
@@ -66,7 +66,7 @@ class JumpSetup:
     def robot(self, mu: float) -> JumpRobot:
         return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)))
 
-    def blocks(self, robot: JumpRobot, layer: GPLayer | IdentityLayer | None = None) -> dict[str, RobotBlock]:
+    def blocks(self, robot: JumpRobot, layer: Layer | None = None) -> dict[str, RobotBlock]:
         """The row families' blocks for ``layer`` (default: the GP layer's latent dimension),
         compiled (or found in the disk cache) once per set-up, mu and layer kind."""
         joint_space = isinstance(layer, IdentityLayer)
@@ -96,7 +96,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     first (:mod:`.cleaning`; of "all", the jumps whose contact schedule is whole)."""
     model, smap = jump_model()
     trs = training_jumps(training)
-    planted = None
+    planted, schedules = None, []
     if plant:
         geom0 = FootGeometry.from_standing(model, trs[0].Q[0])
         schedules = [training_phases(model, c, geom=geom0) for c in trs]
@@ -110,7 +110,9 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     Ys = [t.Y[::stride] for t in trs]
     gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = FootGeometry.from_standing(model, tr.Q[0])
-    phases = training_phases(model, tr, geom=geom)
+    # a planted jump keeps the schedule it was planted to (its toes are flat exactly over those
+    # contact phases; detected again, its heights would move them)
+    phases = schedules[0] if planted is not None else training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
     loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits = estimate_training_dynamics(model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded,
@@ -334,11 +336,13 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     t0 = time.perf_counter()
     js = problem_setup(problem)
     gpdm_time = time.perf_counter() - t0
-    path = latent_path(GPLayer(js.gpdm), js.init["P"]) if k is None else \
-        joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
-    if k is None and o["leg_residual"] > 0:  # the left leg's learned joints get a bounded residual
+    if k is not None:
+        path = joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
+    elif o["leg_residual"] > 0:  # the left leg's learned joints get a bounded residual
         path = leg_residual_path(js.gpdm, js.init["P"], [js.smap.learned_names.index(n) for n in LEG_JOINTS],
                                  o["leg_residual"])
+    else:
+        path = latent_path(GPLayer(js.gpdm), js.init["P"])
     delta = tube_delta(problem.tube, js.gpdm)
     s = settings_from_problem(problem, delta)
     robot = js.robot(s.mu)

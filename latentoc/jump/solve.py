@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import Layer
 from ..nlp import ipopt
 from ..nlp.blocks import RobotBlock
 from ..nlp.exchange import Exchange, exchange_rounds
@@ -84,7 +84,7 @@ def _run_summary(run: ipopt.IpoptResult, nlp: JumpNLP) -> dict:
 class _Solve:
     """One tube's solve: its clock, how it builds, checks and runs Ipopt (:func:`solve_jump`)."""
 
-    def __init__(self, robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
+    def __init__(self, robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], phases: Phases,
                  settings: JumpSettings, start: dict, model: pin.Model, verbose: bool):
         self.robot, self.layer, self.blocks, self.ph, self.s = robot, layer, blocks, phases, settings
         self.start, self.model, self.clock = start, model, _Clock()
@@ -102,13 +102,16 @@ class _Solve:
         self.lap("build_s")
         return nlp
 
-    def check(self, nlp: JumpNLP, w: np.ndarray) -> tuple[dict, dict]:
-        """The export of ``w`` on the 1 kHz grid and its constraints' slack there."""
+    def check(self, nlp: JumpNLP, w: np.ndarray) -> tuple[dict, dict, np.ndarray | None]:
+        """The export of ``w`` on the 1 kHz grid, its constraints' slack there and, with sticking
+        contacts, the foot placement's (:func:`.exchange.placement`)."""
         traj = trajectory(self.robot, self.layer, self.ph, nlp, w)
         sr = series(self.model, traj, self.robot.mu)
+        place = (exchange.placement(sr, traj, float(nlp.variables.unpack(w)["x_L"][0]), self.robot, self.ph, self.s)
+                 if self.s.sticking else None)
         self.last_check = (nlp, w, traj, sr)
         self.lap("check_s")
-        return traj, sr
+        return traj, sr, place
 
     def run_ipopt(self, nlp: JumpNLP, x: np.ndarray, warm: dict | None, what: str) -> ipopt.IpoptResult:
         run = ipopt.solve(nlp.nlp, x, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, self.opts, warm=warm,
@@ -128,8 +131,8 @@ class _Solve:
         self.lap("build_s")
         if not s.two_phase:
             return full, x, None
-        traj, sr = self.check(full, x)
-        seed = exchange.seed_selection(full, x, traj, sr, self.robot, self.ph, s, self.tube)
+        traj, sr, place = self.check(full, x)
+        seed = exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph, s, self.tube)
         nodes = full.selection
         first = nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
                                        seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
@@ -153,13 +156,12 @@ class _Solve:
         self.lap("build_s")
 
         def check(nlp: JumpNLP, run: ipopt.IpoptResult) -> tuple[Selection | None, dict[str, float]]:
-            traj, sr = self.check(nlp, run.x)
-            place = (exchange.placement(sr, traj, float(nlp.variables.unpack(run.x)["x_L"][0]), self.robot, ph, s)
-                     if s.sticking else None)
+            traj, sr, place = self.check(nlp, run.x)
             worst = exchange.violations(sr, traj, s.tube, self.robot.weight, place)
             if not exchange.violated(worst):
                 return None, worst
-            more = nlp.selection.merged(exchange.chosen_rows(nlp, run.x, traj, sr, self.robot, ph, s, exchange.NEAR))
+            more = nlp.selection.merged(exchange.chosen_rows(nlp, run.x, traj, sr, place, self.robot, ph, s,
+                                                             exchange.NEAR))
             grown = more.rows() > nlp.selection.rows() or len(more.contact) > len(nlp.selection.contact)
             return (more if grown else None), worst  # nothing new: the rows hold to Ipopt's tolerance
 
@@ -177,7 +179,7 @@ class _Solve:
         return exchange_rounds(nlp2, start, kind, s.exchange_rounds, s.exchange)
 
 
-def solve_jump(robot: JumpRobot, layer: GPLayer | IdentityLayer, blocks: dict[str, RobotBlock], phases: Phases,
+def solve_jump(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], phases: Phases,
                settings: JumpSettings, start: dict, model: pin.Model, warm: dict | None = None,
                verbose: bool = False) -> JumpSolution:
     """Solve the jump (module doc) along the path of ``layer`` (:mod:`.path`). ``start`` holds the

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import Layer
 from .contact import EDGES
 from .flight import ballistic_base, flight_functions
 from .nlp import JumpNLP
@@ -22,13 +22,13 @@ from .robot import JumpRobot
 __all__ = ["initial_point", "sample_values", "balanced_forces"]
 
 
-def _joint_motion(layer: GPLayer | IdentityLayer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.ndarray]:
+def _joint_motion(layer: Layer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.ndarray]:
     Z = np.hstack([sp_.evaluate(P, t, k) for k in range(3)])
     m = layer.motion(Z)
     return [m.y.T, m.yd.T, m.ydd.T]  # n x K each
 
 
-def initial_point(robot: JumpRobot, layer: GPLayer | IdentityLayer, nlp: JumpNLP, P: np.ndarray, t: np.ndarray, base: np.ndarray,
+def initial_point(robot: JumpRobot, layer: Layer, nlp: JumpNLP, P: np.ndarray, t: np.ndarray, base: np.ndarray,
                   x_L: float, takeoff: float, touchdown: float) -> np.ndarray:
     """The training start (module doc) of ``nlp`` from the path's control points P, the captured
     base (t, base) and the landing toe point x_L."""

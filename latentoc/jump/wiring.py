@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..latent.gp_layer import GPLayer, IdentityLayer
+from ..latent.gp_layer import Layer
 from ..nlp.assemble import Family
 from ..nlp.blocks import RobotBlock
 from ..nlp.evaluators import BlockEvaluator
@@ -61,7 +61,7 @@ class Wiring:
     """What the row modules wire their families with, and the families they add (module doc)."""
 
     robot: JumpRobot
-    layer: GPLayer | IdentityLayer
+    layer: Layer
     blocks: dict[str, RobotBlock]
     phases: Phases
     settings: JumpSettings

@@ -46,7 +46,7 @@ from scipy.linalg.blas import dtrmm
 from ..gpdm import GPDM
 from ..threads import one_blas_thread
 
-__all__ = ["GPLayer", "IdentityLayer", "LatentMotion"]
+__all__ = ["GPLayer", "IdentityLayer", "Layer", "LatentMotion"]
 
 _CACHE_ENTRIES = 6  # inputs whose kernel features are kept (a few node sets share a layer)
 
@@ -93,8 +93,28 @@ def _outer_last(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[:, None, :] * b[None, :, :]
 
 
-class GPLayer:
+class Layer:
+    """The map from the path to the joints a row family's evaluator sees: the joint motion with its
+    tangents (:meth:`motion`), its curvature and, for a layer with a tube (Eq. 29), sigma^2."""
+
+    latent_dim: int
+    output_dim: int
+    has_tube = False  # whether the path has a GPDM variance sigma^2 to hold in the tube
+
+    def motion(self, Z: np.ndarray) -> LatentMotion:
+        raise NotImplementedError
+
+    def curvature(self, Z: np.ndarray, mu: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def variance(self, X: np.ndarray, lam: np.ndarray | None = None):
+        raise TypeError(f"{type(self).__name__} has no sigma^2: its path has no tube")
+
+
+class GPLayer(Layer):
     """Closed-form GP mean motion, variance and their derivatives (module doc)."""
+
+    has_tube = True
 
     def __init__(self, gpdm: GPDM):
         obs = gpdm._obs()
@@ -233,7 +253,7 @@ class GPLayer:
         return s2.copy(), grad.copy(), H * lam.reshape(-1, 1, 1)
 
 
-class IdentityLayer:
+class IdentityLayer(Layer):
     """The joint-space stand-in for :class:`GPLayer`: y = x (the spline is the joint path)."""
 
     def __init__(self, dim: int):

@@ -9,13 +9,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..gpdm import GPDM
-from .gp_layer import GPLayer, LatentMotion, _split
+from .gp_layer import GPLayer, Layer, LatentMotion, _split
 
 __all__ = ["ResidualLayer"]
 
 
-class ResidualLayer(GPLayer):
+class ResidualLayer(Layer):
     """:class:`GPLayer` on the first d coordinates of the path, a residual on ``joints`` in the rest."""
+
+    has_tube = True
 
     def __init__(self, gpdm: GPDM, joints: np.ndarray):
         self.gp = GPLayer(gpdm)

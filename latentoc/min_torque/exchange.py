@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..latent import GPLayer
+
 from ..nlp import ipopt
 from ..nlp.exchange import TUBE_TOL, Exchange, exchange_rounds
 from ..nlp.ipopt import IpoptResult
@@ -85,7 +85,7 @@ def solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild: Callable[[Samp
         P = nlp.control_points(run.x)
         motion = sampled_motion(nlp.layer, robot, nlp.path.spline, P, t, nlp.objective)
         sigma2 = nlp.layer.variance(nlp.path.spline.evaluate(P, t))[0] \
-            if isinstance(nlp.layer, GPLayer) and nlp.tube is not None else None
+            if nlp.layer.has_tube and nlp.tube is not None else None
         add, worst = violated_times(nlp, motion, sigma2, t)
         return (add if add else None), worst
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..latent import GPLayer, IdentityLayer
+from ..latent import Layer
 from ..motions import Demonstration
 from ..nlp.ipopt import IpoptResult
 from ..problem import Problem
@@ -46,7 +46,7 @@ def time_grid(duration: float) -> np.ndarray:
     return np.linspace(0.0, duration, int(round(duration * TRAJECTORY_RATE_HZ)) + 1)
 
 
-def sampled_motion(layer: GPLayer | IdentityLayer, robot: pin.Model, spline: BSpline, P: np.ndarray,
+def sampled_motion(layer: Layer, robot: pin.Model, spline: BSpline, P: np.ndarray,
                    t: np.ndarray, objective: Objective = Objective()) -> dict[str, np.ndarray]:
     """q, v, a (Eq. 26-28 through ``layer``) along the path P at times t, tau from Pinocchio's
     numeric RNEA and the objective's L (default |tau|^2): arrays len(t) x nv (L: len(t))."""

@@ -20,7 +20,7 @@ import pinocchio as pin
 import scipy.sparse as sp
 
 from ..dynamics import SymbolicModel
-from ..latent import GPLayer, IdentityLayer
+from ..latent import Layer
 from ..nlp.assemble import Family
 from ..nlp.blocks import RobotBlock, block_inputs
 from ..nlp.evaluators import BlockEvaluator
@@ -72,7 +72,7 @@ def goal_block(model: SymbolicModel, frame: str, latent_dim: int) -> RobotBlock:
     return RobotBlock.from_parts(f"goal_{frame}", (y, yd, ydd, r), {"e": e, "e2": ca.sumsqr(e)}, latent_dim)
 
 
-def goal_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: SplinePath,
+def goal_family(model: SymbolicModel, layer: Layer, path: SplinePath,
                 goal: EndGoal) -> tuple[Family, np.ndarray, np.ndarray]:
     """The goal's rows at t = T and their bounds (module doc)."""
     block = goal_block(model, goal.frame, layer.latent_dim)

@@ -30,7 +30,7 @@ import scipy.sparse as sp
 
 from ..dynamics import SymbolicModel
 from ..gpdm import GPDM
-from ..latent import GPLayer, IdentityLayer
+from ..latent import GPLayer, IdentityLayer, Layer
 from ..nlp.assemble import Family, SparseNLP
 from ..nlp.blocks import RobotBlock
 from ..nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
@@ -72,7 +72,7 @@ class MinTorqueNLP:
     method: str
     nlp: SparseNLP
     path: SplinePath
-    layer: GPLayer | IdentityLayer
+    layer: Layer
     lbx: np.ndarray
     ubx: np.ndarray
     lbg: np.ndarray
@@ -110,7 +110,7 @@ def _spline_inputs(path: SplinePath, t: np.ndarray, orders: int) -> tuple[sp.csr
     return ni.build()
 
 
-def _torque_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray, w: np.ndarray,
+def _torque_family(model: SymbolicModel, layer: Layer, path: SplinePath, t: np.ndarray, w: np.ndarray,
                    tmax: np.ndarray | None, objective: Objective) -> tuple[Family, np.ndarray, np.ndarray]:
     """The objective's family (cf = quadrature weights on L) and, with limits, the torque rows."""
     nv, K = model.nv, len(t)
@@ -128,17 +128,18 @@ def _torque_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: S
     return Family("torque", BlockEvaluator(block, layer), S, s0, Cg=Cg, cf=cf.ravel()), lb, ub
 
 
-def _joint_limit_family(layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray) -> Family:
+def _joint_limit_family(layer: Layer, path: SplinePath, t: np.ndarray) -> Family:
     """Rows y(t_j) (node-major): the GP mean of the latent points, or, when the path is the joint
     path itself (identity layer), linear in w: y = B0 P."""
     if isinstance(layer, IdentityLayer):
         S, s0 = _spline_inputs(path, t, 1)  # no node evaluator: the rows are L w + c
         return Family("joint_limits", None, sp.csr_matrix((0, path.n_w)), np.zeros(0), L=S, c=s0)
     S, s0 = _spline_inputs(path, t, 1)
+    assert isinstance(layer, GPLayer)  # the arm's paths: the GP layer or the identity
     return Family("joint_limits", MeanEvaluator(layer), S, s0, Cg=sp.identity(len(t) * layer.output_dim, format="csr"))
 
 
-def _velocity_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path: SplinePath, t: np.ndarray) -> Family:
+def _velocity_family(model: SymbolicModel, layer: Layer, path: SplinePath, t: np.ndarray) -> Family:
     """Rows yd(t_j) (node-major) for the velocity limits."""
     S, s0 = _spline_inputs(path, t, 3)
     block = velocity_block(model.nv, layer.latent_dim)
@@ -146,7 +147,7 @@ def _velocity_family(model: SymbolicModel, layer: GPLayer | IdentityLayer, path:
                   Cg=sp.identity(len(t) * model.nv, format="csr"))
 
 
-def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, settings: MinTorqueSettings,
+def _build(method: str, model: SymbolicModel, layer: Layer, settings: MinTorqueSettings,
            path: SplinePath, lbx: np.ndarray, ubx: np.ndarray, tube: float | None,
            extra: Samples | None = None) -> MinTorqueNLP:
     if model.nq != model.nv or model.nv != layer.output_dim:
@@ -163,7 +164,7 @@ def _build(method: str, model: SymbolicModel, layer: GPLayer | IdentityLayer, se
     Kg = len(grid_t)
     families, lbg, ubg = [], [], []
     if tube is not None:  # sigma^2(x(t_j)) / delta <= 1 (Eq. 29), relative: Ipopt's tolerances in units of delta
-        if not isinstance(layer, GPLayer):
+        if not layer.has_tube:
             raise TypeError("a tube needs the GP layer: sigma^2 is the GPDM's")
         S, s0 = _spline_inputs(path, grid_t, 1)
         families.append(Family("tube", VarianceEvaluator(layer), S, s0, Cg=sp.identity(Kg, format="csr") / tube))

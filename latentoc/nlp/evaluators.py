@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..latent.gp_layer import GPLayer, IdentityLayer, LatentMotion
+from ..latent.gp_layer import GPLayer, IdentityLayer, LatentMotion, Layer
 from .blocks import RobotBlock, compile_blocks, stack_tangents
 
 __all__ = ["BlockEvaluator", "MeanEvaluator", "VarianceEvaluator"]
@@ -29,7 +29,7 @@ def _dm(x) -> np.ndarray:
 class BlockEvaluator:
     """A robot block fed by a GP layer; local inputs s = (x, xd, xdd, r) per node."""
 
-    def __init__(self, block: RobotBlock, layer: GPLayer | IdentityLayer):
+    def __init__(self, block: RobotBlock, layer: Layer):
         if block.latent_dim != layer.latent_dim or block.output_dim != layer.output_dim:
             raise ValueError(f"block {block.name} takes d = {block.latent_dim}, D = {block.output_dim}; "
                              f"the layer has d = {layer.latent_dim}, D = {layer.output_dim}")
@@ -100,7 +100,7 @@ class MeanEvaluator:
 class VarianceEvaluator:
     """sigma^2(x) (Eq. 19) at K latent points; local inputs s = x."""
 
-    def __init__(self, layer: GPLayer):
+    def __init__(self, layer: Layer):
         self.layer = layer
         self.n_in, self.n_out = layer.latent_dim, 1
 

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...nlp.assemble import Family
-from ...latent.gp_layer import GPLayer
+
 from ...nlp.evaluators import VarianceEvaluator
 from ..wiring import Wiring
 
@@ -17,7 +17,7 @@ def wire(w: Wiring) -> None:
     t = np.asarray(w.selection.tube, float)
     if not len(t):
         return
-    assert isinstance(w.layer, GPLayer)  # build_nlp puts no tube on a joint path
+    assert w.layer.has_tube  # build_nlp puts no tube on a joint path
     ni = w.inputs(len(t))
     w.latent(ni, t, orders=1)
     S, s0 = ni.build()
