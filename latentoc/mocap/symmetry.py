@@ -20,11 +20,36 @@ import copy
 import numpy as np
 import pinocchio as pin
 
+from ..errors import LatentocError
 from .asf import Skeleton
 from .skeleton_model import euler_matrix, joint_q_index
 
 S_ASF = np.diag([-1.0, 1.0, 1.0])
 S_WORLD = np.diag([1.0, -1.0, 1.0])
+MIRROR_TOLERANCE = 1e-6  # unit-axis dot products: what counts as mirror-image axes
+ORIGIN_TOLERANCE = 1e-3  # m: mirror-image joint origins (URDFs print them rounded: the G1's differ by 10 um)
+
+
+class MirrorError(LatentocError, ValueError):
+    """A robot whose joints do not pair into a left/right mirror."""
+
+
+def _joint_axis(joint: pin.JointModel, name: str) -> np.ndarray:
+    """The rotation axis of a revolute joint in its own frame."""
+    kind = joint.shortname()
+    if kind in ("JointModelRX", "JointModelRY", "JointModelRZ"):
+        return np.eye(3)["XYZ".index(kind[-1])]
+    if kind == "JointModelRevoluteUnaligned":
+        return np.asarray(joint.extract().axis, float)
+    raise MirrorError(f"joint {name!r}: a {kind} joint, not a revolute one, cannot be mirrored")
+
+
+def _factor(a_right: np.ndarray, a_left_mirrored: np.ndarray, what: str) -> float:
+    """angle_right = factor * angle_left for the axes a_right and S a_left (module doc)."""
+    s = float(a_right @ a_left_mirrored)
+    if abs(abs(s) - 1.0) > MIRROR_TOLERANCE:
+        raise MirrorError(f"{what}: the axes are not mirror images (dot {s:.3g})")
+    return -float(np.sign(s))
 
 
 def mirror_partner(bone: str, skeleton: Skeleton) -> str | None:
@@ -56,31 +81,80 @@ class SymmetryMap:
 
     def __init__(self, model: pin.Model, skeleton: Skeleton) -> None:
         jq = joint_q_index(model)
-        self.nq = model.nq
-        self.learned_names: list[str] = []
-        self.copied: list[tuple[int, int, float]] = []  # (right q idx, left y idx, factor)
-        self.centre_factor: dict[str, float] = {}
-        names_by_q = sorted(jq, key=lambda n: jq[n])
-        for name in names_by_q:
+        pairs: dict[str, tuple[str, float]] = {}
+        centre: dict[str, float] = {}
+        for name in jq:
             bone, dof = name.rsplit("_", 1)
             partner = mirror_partner(bone, skeleton)
             if partner is None:
-                self.centre_factor[name] = mirror_sign(skeleton, bone, bone, dof)
-            if partner is None or bone.startswith("l"):
-                self.learned_names.append(name)
+                centre[name] = mirror_sign(skeleton, bone, bone, dof)
+            elif bone.startswith("r"):
+                pairs[name] = (f"{partner}_{dof}", mirror_sign(skeleton, partner, bone, dof))
+        self._build(model.nq, jq, pairs, centre)
+
+    @classmethod
+    def from_joint_names(cls, model: pin.Model, left: str = "left", right: str = "right") -> "SymmetryMap":
+        """The map of a robot whose right joints are named as their left partners with ``right`` for
+        ``left`` (``left_hip_pitch_joint``, ``leg_left_1_joint``); the factors from the joint axes at
+        the neutral pose (module doc, with the world reflection). Raises :class:`MirrorError` naming
+        the joint where a partner is missing or the two are not mirror images."""
+        d = model.createData()
+        pin.forwardKinematics(model, d, pin.neutral(model))
+        jq = joint_q_index(model)
+        jid = {model.names[j]: j for j in range(1, model.njoints)}
+        for j in range(1, model.njoints):
+            if model.joints[j].nq > 1 and model.joints[j].shortname() != "JointModelFreeFlyer":
+                raise MirrorError(f"joint {model.names[j]!r}: only 1-DOF joints can be mirrored "
+                                  f"({model.joints[j].shortname()})")
+
+        def axis(name: str) -> np.ndarray:
+            j = jid[name]
+            M = d.oMi[j]
+            return M.rotation @ _joint_axis(model.joints[j], name)
+
+        def origin(name: str) -> np.ndarray:
+            return d.oMi[jid[name]].translation
+
+        pairs: dict[str, tuple[str, float]] = {}
+        centre: dict[str, float] = {}
+        for name in jq:
+            if right in name:
+                partner = name.replace(right, left)
+                if partner not in jq:
+                    raise MirrorError(f"joint {name!r}: no left partner {partner!r}")
+                if np.linalg.norm(origin(name) - S_WORLD @ origin(partner)) > ORIGIN_TOLERANCE:
+                    raise MirrorError(f"joints {partner!r} and {name!r}: their origins are not mirror images "
+                                      f"({origin(partner).round(4)} and {origin(name).round(4)})")
+                pairs[name] = (partner, _factor(axis(name), S_WORLD @ axis(partner), f"{partner}/{name}"))
+            elif left in name:
+                if name.replace(left, right) not in jq:
+                    raise MirrorError(f"joint {name!r}: no right partner {name.replace(left, right)!r}")
+            else:
+                if abs(origin(name)[1]) > ORIGIN_TOLERANCE:
+                    raise MirrorError(f"joint {name!r}: a centre joint off the sagittal plane (y = {origin(name)[1]:.4f} m)")
+                centre[name] = _factor(axis(name), S_WORLD @ axis(name), name)
+        out = cls.__new__(cls)
+        out._build(model.nq, jq, pairs, centre)
+        return out
+
+    def _build(self, nq: int, jq: dict[str, int], pairs: dict[str, tuple[str, float]], centre: dict[str, float]) -> None:
+        """The map from each right joint's (left partner, factor) and each centre joint's factor."""
+        self.nq = nq
+        names_by_q = sorted(jq, key=lambda n: jq[n])
+        self.learned_names: list[str] = [n for n in names_by_q if n not in pairs]
         self.learned_q = np.array([jq[n] for n in self.learned_names], dtype=int)
+        self.centre_factor: dict[str, float] = dict(centre)
         ypos = {n: k for k, n in enumerate(self.learned_names)}
+        self.copied: list[tuple[int, int, float]] = []  # (right q idx, left y idx, factor)
         self.right_names: list[str] = []
         for name in names_by_q:
-            bone, dof = name.rsplit("_", 1)
-            left = mirror_partner(bone, skeleton) if bone.startswith("r") else None
-            if left is not None:
-                f = mirror_sign(skeleton, left, bone, dof)
-                self.copied.append((jq[name], ypos[f"{left}_{dof}"], f))
+            if name in pairs:
+                left, f = pairs[name]
+                self.copied.append((jq[name], ypos[left], f))
                 self.right_names.append(name)
         # full mirror map on q (joint part): q'[i] = factor * q[src]
-        self._mirror_src = np.arange(model.nq)
-        self._mirror_fac = np.ones(model.nq)
+        self._mirror_src = np.arange(nq)
+        self._mirror_fac = np.ones(nq)
         for name, f in self.centre_factor.items():
             self._mirror_fac[jq[name]] = f
         for r_idx, y_idx, f in self.copied:
