@@ -110,8 +110,10 @@ def _plot_arguments(sub: Any) -> None:
 def _view_arguments(sub: Any) -> None:
     """The ``view`` command's arguments."""
     vw = sub.add_parser("view", help="the 3-D view of a result: one self-contained HTML page with the animation")
-    vw.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz)")
-    vw.add_argument("--html", type=Path, default=None, help="the page to write (default: RESULT/view.html)")
+    vw.add_argument("result", type=Path, help="a result folder (result.json, trajectory.npz), or a retargeted "
+                                              "motion (`retarget`'s .npz: the robot beside the source)")
+    vw.add_argument("--html", type=Path, default=None,
+                    help="the page to write (default: RESULT/view.html; for an .npz, its name with .html)")
     vw.add_argument("--rate", type=_positive, default=50.0, help="animation frames per second of motion time (default 50)")
 
 

@@ -75,7 +75,7 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     if not args.rate > 0:
         raise LatentocError(f"--rate must be positive, got {args.rate}")
-    path = write_html(args.result, args.html, rate_hz=args.rate)
+    path = write_html(args.result, args.html, rate_hz=args.rate)  # a result folder, or a retargeted .npz
     print(f"wrote {path} (open it in a browser; no server needed)")
     return 0
 
@@ -360,7 +360,8 @@ def _source_motion(args: argparse.Namespace, model: Any) -> tuple[Any, Any]:
 
 def cmd_retarget(args: argparse.Namespace) -> int:
     """Retarget ``--motion`` with the keypoint map MAP; write the target's motion as an NPZ
-    (``t``, ``q``: the target's configurations, ``retarget``: the report as JSON)."""
+    (``t``, ``q``: the target's configurations, ``q_source``: the source's it followed, ``retarget``:
+    the report as JSON)."""
     import numpy as np
     import pinocchio as pin
 
@@ -380,7 +381,8 @@ def cmd_retarget(args: argparse.Namespace) -> int:
     r = retarget(source, Q, t, target, spec.keypoints, scale=scale, rise=spec.rise, speed=spec.speed)
     info = {"map": str(args.map), "motion": str(args.motion), "start": args.start, "stop": args.stop,
             "source": spec.source, "target": spec.target, **r.info()}
-    atomic_write(Path(args.out), lambda f: np.savez(f, t=r.t, q=r.Q, retarget=np.array(dumps_json(info))), binary=True)
+    atomic_write(Path(args.out), lambda f: np.savez(f, t=r.t, q=r.Q, q_source=Q,
+                                                          retarget=np.array(dumps_json(info))), binary=True)
     print(f"{spec.source} -> {spec.target}: {len(r.t)} frames, scale {r.scale:.3f}")
     print(f"  {'keypoint':16s} {'RMS mm':>8s} {'max mm':>8s}  planted frames")
     for name, (rms, mx) in r.residual_mm.items():

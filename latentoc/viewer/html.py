@@ -10,6 +10,7 @@ import numpy as np
 
 from ..files import NPZ_ERRORS
 from ..results import Result, result_and_output
+from .retargeted import retargeted_scene
 from .scene import build_scene
 
 SIM_NPZ = "simulation.npz"  # latentoc simulate's replay in a result folder
@@ -49,6 +50,7 @@ PAGE = """<!doctype html>
     <option value="0.25">0.25x</option><option value="0.1">0.1x</option></select>
   <label><input id="ghost" type="checkbox" checked> initial motion</label>
   <label><input id="simulated" type="checkbox" checked> simulated (MuJoCo)</label>
+  <label><input id="beside" type="checkbox" checked> <span id="beside-label">beside</span></label>
   <label><input id="forces" type="checkbox" checked> forces</label>
   <label><input id="cones" type="checkbox" checked> friction cones</label>
   <label><input id="polygon" type="checkbox" checked> support polygon, COM, ZMP</label>
@@ -81,7 +83,14 @@ def page_html(scene: dict) -> str:
 def write_html(result: Result | str | Path, path: str | Path | None = None, rate_hz: float = 50.0) -> Path:
     """Write the 3-D view of a result (or of the result folder a path names) to ``path`` (default:
     the folder's ``view.html``); returns the path. A folder's ``simulation.npz`` (``latentoc
-    simulate``) is shown beside the planned motion."""
+    simulate``) is shown beside the planned motion. A path to ``latentoc retarget``'s .npz: the
+    robot's motion with the source's beside it (:mod:`.retargeted`; default page: beside the file,
+    its name with ``.html``)."""
+    if not isinstance(result, Result) and Path(result).suffix == ".npz" and Path(result).is_file():
+        out = Path(result).with_suffix(".html") if path is None else Path(path)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(page_html(retargeted_scene(result, rate_hz)), encoding="utf-8")
+        return out
     folder = None if isinstance(result, Result) else Path(result)
     result, out = result_and_output(result, path, "view.html", "write_html")
     simulated = _simulation(folder) if folder is not None else None

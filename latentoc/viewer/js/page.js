@@ -121,6 +121,20 @@
   if (S.motions.initial) addMotion("initial", 0x7fa7d9);
   if (S.motions.simulated) addMotion("simulated", 0xe0823a); // the MuJoCo replay, orange
 
+  // a second model beside the robot (a retargeted motion's source), in its own colours
+  let beside = null;
+  if (S.beside) {
+    const group = new THREE.Group();
+    const objects = S.beside.parts.map((p) => {
+      const o = new THREE.Mesh(partGeometry(p), new THREE.MeshStandardMaterial({
+        color: new THREE.Color().fromArray(p.colour), roughness: 0.55, metalness: 0.05 }));
+      group.add(o);
+      return o;
+    });
+    scene.add(group);
+    beside = { group: group, objects: objects, poses: f32(S.beside.poses) };
+  }
+
   // ---------------------------------------------------------------- contacts
   let contacts = null;
   if (S.contacts) {
@@ -176,6 +190,14 @@
         m.objects[k].quaternion.set(p[o + 3], p[o + 4], p[o + 5], p[o + 6]);
       }
     }
+    if (beside) {
+      const n2 = beside.objects.length, p = beside.poses;
+      for (let k = 0; k < n2; k++) {
+        const o = (i * n2 + k) * 7;
+        beside.objects[k].position.set(p[o], p[o + 1], p[o + 2]);
+        beside.objects[k].quaternion.set(p[o + 3], p[o + 4], p[o + 5], p[o + 6]);
+      }
+    }
     if (contacts) {
       const c = contacts, m = c.count;
       for (let k = 0; k < m; k++) {
@@ -210,16 +232,19 @@
   const controls = {
     play: document.getElementById("play"), slider: document.getElementById("time"), label: document.getElementById("clock"),
     speed: document.getElementById("speed"), ghost: document.getElementById("ghost"), simulated: document.getElementById("simulated"),
-    forces: document.getElementById("forces"),
+    forces: document.getElementById("forces"), beside: document.getElementById("beside"),
     cones: document.getElementById("cones"), polygon: document.getElementById("polygon"),
   };
   document.getElementById("title").textContent = S.title;
   document.getElementById("summary").textContent = S.summary + " | " + (S.parts_are === "meshes" ? "the robot's meshes" : "skeleton capsules") +
     (S.motions.initial ? " | ghost: the initial motion" : "") +
     (S.motions.simulated ? " | orange: its replay in MuJoCo" : "") +
+    (S.beside ? " | beside it: " + S.beside.label : "") +
     (S.contacts ? " | forces: " + S.contacts.force_scale + " m per body weight, cones: friction mu = " + S.contacts.mu : "");
   if (!S.motions.initial) controls.ghost.parentElement.style.display = "none";
   if (!S.motions.simulated) controls.simulated.parentElement.style.display = "none";
+  if (!S.beside) controls.beside.parentElement.style.display = "none";
+  else document.getElementById("beside-label").textContent = S.beside.label;
   if (!S.contacts) for (const k of ["forces", "cones", "polygon"]) controls[k].parentElement.style.display = "none";
   const hold = 0.5; // s on the last frame before the loop starts again
   const clock = { playing: true, t: 0, wall: performance.now(), played: 0, ticks: 0 }; // played: seconds, never wrapped
@@ -235,12 +260,13 @@
   function visibility() {
     if (motions.initial) motions.initial.group.visible = controls.ghost.checked;
     if (motions.simulated) motions.simulated.group.visible = controls.simulated.checked;
+    if (beside) beside.group.visible = controls.beside.checked;
     if (contacts) {
       contacts.arrowGroup.visible = controls.forces.checked;
       contacts.coneGroup.visible = controls.cones.checked;
     }
   }
-  for (const k of ["ghost", "simulated", "forces", "cones", "polygon"]) controls[k].addEventListener("change", visibility);
+  for (const k of ["ghost", "simulated", "beside", "forces", "cones", "polygon"]) controls[k].addEventListener("change", visibility);
   visibility();
 
   function resize() {
@@ -290,6 +316,7 @@
     document.body.dataset.played = clock.played.toFixed(3);
     document.body.dataset.ticks = String(++clock.ticks);
     if (contacts) document.body.dataset.contacts = JSON.stringify(contactsShown());
+    if (beside) document.body.dataset.beside = String(beside.objects.length) + (beside.group.visible ? " shown" : " hidden");
     requestAnimationFrame(loop);
   }
   requestAnimationFrame((now) => { clock.wall = now; loop(now); });
