@@ -10,7 +10,7 @@ import pytest
 from latentoc.dynamics import DynamicsInputError, SymbolicModel, available_backends
 from latentoc.robots import load_robot
 
-ROBOTS = ["panda", "ur5", "talos", "human"]
+ROBOTS = ["panda", "ur5", "talos", "human", "g1"]  # g1: the legged robot of issue 35
 N_STATES = 20
 LWA = pin.LOCAL_WORLD_ALIGNED
 
