@@ -96,7 +96,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     first (:mod:`.cleaning`; of "all", the jumps whose contact schedule is whole)."""
     model, smap = jump_model()
     trs = training_jumps(training)
-    planted, schedules = None, []
+    planted = None
     if plant:
         geom0 = FootGeometry.from_standing(model, trs[0].Q[0])
         schedules = [training_phases(model, c, geom=geom0) for c in trs]
@@ -110,9 +110,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     Ys = [t.Y[::stride] for t in trs]
     gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = FootGeometry.from_standing(model, tr.Q[0])
-    # a planted jump keeps the schedule it was planted to (its toes are flat exactly over those
-    # contact phases; detected again, its heights would move them)
-    phases = schedules[0] if planted is not None else training_phases(model, tr, geom=geom)
+    phases = training_phases(model, tr, geom=geom)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
     loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits = estimate_training_dynamics(model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded,
