@@ -36,7 +36,7 @@ from ..mocap.symmetry import SymmetryMap
 from .training import BALL, FOOT, TOE
 
 POINTS = ("heel", "ball", "toe", "pad")
-FRAMES = {"heel": FOOT, "ball": BALL, "toe": TOE, "pad": TOE}  # the body frame each point is fixed in
+FRAMES = {"heel": FOOT, "ball": BALL, "toe": TOE, "pad": TOE}  # the left frame each point is fixed in
 MU = 0.4
 TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch (the pad point)
 EDGES = 2 * len(POINTS)  # friction-pyramid edge weights per foot
@@ -51,6 +51,16 @@ def joint_embedding(smap: SymmetryMap) -> np.ndarray:
     return E[7:]
 
 
+@dataclass(frozen=True)
+class ContactPoint:
+    """A contact point of the left foot, fixed in the frame ``frame`` at ``offset`` (in that frame's
+    coordinates; None: the frame's origin)."""
+
+    name: str
+    frame: str
+    offset: np.ndarray | None = None
+
+
 @dataclass
 class FootGeometry:
     """Heel point in the ``lfoot`` frame, pad point in the ``ltoes_end`` frame."""
@@ -58,6 +68,16 @@ class FootGeometry:
     heel_offset: np.ndarray
     pad_offset: np.ndarray
     footprint: np.ndarray | None = None  # world heel, ball, toe, pad standing (3 x 4)
+
+    def points(self) -> tuple[ContactPoint, ...]:
+        """The left foot's points in :data:`POINTS`' order, each in its frame."""
+        offsets = {"heel": self.heel_offset, "pad": self.pad_offset}
+        return tuple(ContactPoint(p, FRAMES[p], offsets.get(p)) for p in POINTS)
+
+    @staticmethod
+    def side_frame(side: str, frame: str) -> str:
+        """The frame of the left foot's ``frame`` on ``side`` ("l" or "r"): its mirror partner on the right."""
+        return frame if side == "l" else "r" + frame[1:]
 
     @classmethod
     def from_standing(cls, model: pin.Model, q_stand: np.ndarray) -> "FootGeometry":
@@ -77,12 +97,14 @@ class FootGeometry:
 def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
     """(q) -> P (3 x 4): world heel, ball, toe, pad of the left foot as columns."""
     q = ca.SX.sym("q", sym.nq)
-    pf, Rf = sym.frame_placement(FOOT)(q)
-    heel = pf + Rf @ ca.DM(geom.heel_offset)
-    ball = sym.frame_placement(BALL)(q)[0]
-    pt, Rt = sym.frame_placement(TOE)(q)
-    pad = pt + Rt @ ca.DM(geom.pad_offset)
-    return ca.Function("foot_points", [q], [ca.horzcat(heel, ball, pt, pad)], ["q"], ["P"])
+    placed: dict[str, Any] = {}
+    columns = []
+    for c in geom.points():
+        if c.frame not in placed:  # each frame placed once (its expression shared by its points)
+            placed[c.frame] = sym.frame_placement(c.frame)(q)
+        p, R = placed[c.frame]
+        columns.append(p if c.offset is None else p + R @ ca.DM(c.offset))
+    return ca.Function("foot_points", [q], [ca.horzcat(*columns)], ["q"], ["P"])
 
 
 def generator_matrix(mu: float = MU) -> np.ndarray:
@@ -130,8 +152,8 @@ def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -
     P = points_function(sym, geom)(q)
     gen: Any = 0
     for side in "lr":
-        for k, point in enumerate(POINTS):
-            name = side + FRAMES[point][1:]
+        for k, c in enumerate(geom.points()):
+            name = geom.side_frame(side, c.frame)
             o = sym.frame_placement(name)(q)[0]
             p = P[:, k] if side == "l" else ca.DM(MIRROR) @ P[:, k]
             J = sym.frame_jacobian(name)(q)
@@ -144,10 +166,11 @@ def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -
 def foot_points(model: pin.Model, data: pin.Data, geom: FootGeometry) -> np.ndarray:
     """Numeric (3, 4): world heel, ball, toe, pad of the left foot as columns (frames already
     placed), the numeric twin of :func:`points_function`."""
-    M = data.oMf[model.getFrameId(FOOT)]
-    T = data.oMf[model.getFrameId(TOE)]
-    return np.column_stack([M.translation + M.rotation @ geom.heel_offset, data.oMf[model.getFrameId(BALL)].translation,
-                            T.translation, T.translation + T.rotation @ geom.pad_offset])
+    columns = []
+    for c in geom.points():
+        M = data.oMf[model.getFrameId(c.frame)]
+        columns.append(M.translation if c.offset is None else M.translation + M.rotation @ c.offset)
+    return np.column_stack(columns)
 
 
 def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootGeometry) -> np.ndarray:
@@ -159,9 +182,9 @@ def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootG
     out = np.zeros((len(POINTS), 3, model.nv))
     left = foot_points(model, data, geom).T
     for side in "lr":
-        for k, point in enumerate(POINTS):
+        for k, c in enumerate(geom.points()):
             p = left[k] if side == "l" else MIRROR @ left[k]
-            out[k] += point_jacobian(model, data, model.getFrameId(side + FRAMES[point][1:]), p)
+            out[k] += point_jacobian(model, data, model.getFrameId(geom.side_frame(side, c.frame)), p)
     return out
 
 
