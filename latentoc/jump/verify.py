@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import FRAMES, POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
+from .contact import POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
 from ..intervals import runs
 from ..kinematics import point_jacobian
 from ..support_polygon import feet_polygon
@@ -145,8 +145,8 @@ def _left_points(model: pin.Model, d: pin.Data, geom: FootGeometry, v: np.ndarra
     """World positions (4 x 3) and velocities of the left foot's points (frames and joint Jacobians placed)."""
     P = foot_points(model, d, geom).T
     V = np.zeros_like(P)
-    for k, point in enumerate(POINTS):
-        V[k] = point_jacobian(model, d, model.getFrameId(FRAMES[point]), P[k]) @ v
+    for k, c in enumerate(geom.points()):
+        V[k] = point_jacobian(model, d, model.getFrameId(c.frame), P[k]) @ v
     return P, V
 
 
