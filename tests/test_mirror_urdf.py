@@ -71,3 +71,14 @@ def test_a_joint_without_partner_is_refused_by_name():
     model = load_robot("g1")
     with pytest.raises(MirrorError, match="'left_hip_pitch_joint': no right partner"):
         SymmetryMap.from_joint_names(model, left="left_hip", right="right_knee")
+
+
+def test_the_leg_of_a_foot_is_the_chain_of_joints_above_it():
+    """The joints a planting may change (jump.cleaning.leg_joints): the G1's left leg, base to foot,
+    found from the kinematic tree, against its joints named left_hip/knee/ankle."""
+    from latentoc.jump.cleaning import leg_joints
+
+    model = load_robot("g1")
+    leg = leg_joints(model, "left_ankle_roll_link")
+    named = [model.names[j] for j in range(1, model.njoints) if model.names[j].startswith(("left_hip", "left_knee", "left_ankle"))]
+    assert list(leg) == named and len(leg) == 6

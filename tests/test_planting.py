@@ -20,9 +20,9 @@ def captured():
 
 
 def _leg_v(model):
-    from latentoc.jump.cleaning import LEG_JOINTS
+    from latentoc.jump.cleaning import leg_joints
 
-    return np.array([model.joints[model.getJointId(n)].idx_v for n in LEG_JOINTS])
+    return np.array([model.joints[model.getJointId(n)].idx_v for n in leg_joints(model)])
 
 
 def test_planted_frame_reaches_its_target_with_the_least_change(captured):

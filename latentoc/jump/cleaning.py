@@ -27,11 +27,10 @@ from .contact import FootGeometry
 from .phases import Phases
 from .training import JumpTraining
 
-__all__ = ["ANCHOR", "HINGE", "LEG_JOINTS", "PlantedTraining", "planted_training", "plantable"]
+__all__ = ["ANCHOR", "HINGE", "PlantedTraining", "leg_joints", "planted_training", "plantable"]
 
 ANCHOR = "ltoes"  # the body held flat on the ground in contact
 HINGE = "ltoes_rx"  # the toe joint: the hinge between the flat foot and the flat toes
-LEG_JOINTS = ("lfemur_rz", "lfemur_ry", "lfemur_rx", "ltibia_rx", "lfoot_rz", "lfoot_rx", "ltoes_rx")
 TAPER = 0.05  # s over which the correction fades into the flight
 TOE_RAMP = 0.05  # s over which the toe joint is brought to its standing angle before the heel loads
 SAGITTAL_BASE_V = (0, 2, 4)  # the base's x, z and pitch velocity coordinates
@@ -47,6 +46,13 @@ class PlantedTraining:
     rms_change_deg: dict[str, float]  # root mean square over the frames, degrees
     landing_shift: np.ndarray  # the landing's planted toes frame less the standing one (x, y, z), m
     base_change: np.ndarray  # largest |change| of the base's x, z (m) and pitch (rad)
+
+
+def leg_joints(model: pin.Model, anchor: str = ANCHOR) -> tuple[str, ...]:
+    """The 1-DOF joints between the base and the body frame ``anchor`` (the leg that carries it),
+    base to foot: for the CMU humanoid's toes the hip's three, the knee, the ankle's two and the toe."""
+    j = model.frames[model.getFrameId(anchor)].parentJoint
+    return tuple(model.names[k] for k in model.supports[j] if k > 0 and model.joints[k].nq == 1)
 
 
 def _ramped(theta: np.ndarray, target: float, held: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -88,21 +94,22 @@ def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phas
     contact = stance | landing
     theta = _ramped(Q[:, iq], float(Q[0, iq]), flat, t)
     held = contact & (np.abs(t[:, None] - t[flat][None, :]).min(axis=1) < TOE_RAMP)
-    legs_v = [model.joints[model.getJointId(n)].idx_v for n in LEG_JOINTS]
+    leg = leg_joints(model)
+    legs_v = [model.joints[model.getJointId(n)].idx_v for n in leg]
     free_v = np.array(list(SAGITTAL_BASE_V) + legs_v)
     weights = np.concatenate([BASE_WEIGHTS, np.ones(len(legs_v))])
     iv = model.joints[jid].idx_v
     plants = [Plant(ANCHOR, standing, stance), Plant(ANCHOR, on_ground, landing)]
     Qp = plant(model, Q, free_v, plants, {iv: (theta, held)}, weights)
-    Y0, legs = tr.Y, [smap.learned_names.index(n) for n in LEG_JOINTS]
+    Y0, legs = tr.Y, [smap.learned_names.index(n) for n in leg]
     dY = np.zeros_like(Y0)
     dY[:, legs] = smap.to_learned(Qp)[:, legs] - Y0[:, legs]
     dY = taper(dY, contact, t, TAPER)
     db = taper(np.where(contact[:, None], freeflyer_to_base(Qp[:, :7]) - tr.base, 0.0), contact, t, TAPER)
     Y, base = Y0 + dY, tr.base + db
     Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
-    change = {n: float(np.degrees(np.max(np.abs(dY[:, k])))) for n, k in zip(LEG_JOINTS, legs)}
-    rms = {n: float(np.degrees(np.sqrt(np.mean(dY[:, k] ** 2)))) for n, k in zip(LEG_JOINTS, legs)}
+    change = {n: float(np.degrees(np.max(np.abs(dY[:, k])))) for n, k in zip(leg, legs)}
+    rms = {n: float(np.degrees(np.sqrt(np.mean(dY[:, k] ** 2)))) for n, k in zip(leg, legs)}
     base_change = np.max(np.abs(db), axis=0)
     return PlantedTraining(JumpTraining(t, Y, base, Qs), change, rms, on_ground.translation - standing.translation,
                            base_change)
