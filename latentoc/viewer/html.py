@@ -88,14 +88,13 @@ def write_html(result: Result | str | Path, path: str | Path | None = None, rate
     its name with ``.html``)."""
     if not isinstance(result, Result) and Path(result).suffix == ".npz" and Path(result).is_file():
         out = Path(result).with_suffix(".html") if path is None else Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(page_html(retargeted_scene(result, rate_hz)), encoding="utf-8")
-        return out
-    folder = None if isinstance(result, Result) else Path(result)
-    result, out = result_and_output(result, path, "view.html", "write_html")
-    simulated = _simulation(folder) if folder is not None else None
+        scene = retargeted_scene(result, rate_hz)
+    else:
+        folder = None if isinstance(result, Result) else Path(result)
+        result, out = result_and_output(result, path, "view.html", "write_html")
+        scene = build_scene(result, rate_hz, _simulation(folder) if folder is not None else None)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page_html(build_scene(result, rate_hz, simulated)), encoding="utf-8")
+    out.write_text(page_html(scene), encoding="utf-8")
     return out
 
 

@@ -180,24 +180,17 @@
     while (lo < hi) { const mid = (lo + hi + 1) >> 1; if (times[mid] <= t + 1e-6) lo = mid; else hi = mid - 1; } // float32 times
     return lo;
   }
+  function place(m, i) { // a motion's or the second model's parts at frame i
+    const n = m.objects.length, p = m.poses;
+    for (let k = 0; k < n; k++) {
+      const o = (i * n + k) * 7;
+      m.objects[k].position.set(p[o], p[o + 1], p[o + 2]);
+      m.objects[k].quaternion.set(p[o + 3], p[o + 4], p[o + 5], p[o + 6]);
+    }
+  }
   function pose(i) {
-    const n = S.parts.length;
-    for (const name in motions) {
-      const m = motions[name];
-      for (let k = 0; k < n; k++) {
-        const o = (i * n + k) * 7, p = m.poses;
-        m.objects[k].position.set(p[o], p[o + 1], p[o + 2]);
-        m.objects[k].quaternion.set(p[o + 3], p[o + 4], p[o + 5], p[o + 6]);
-      }
-    }
-    if (beside) {
-      const n2 = beside.objects.length, p = beside.poses;
-      for (let k = 0; k < n2; k++) {
-        const o = (i * n2 + k) * 7;
-        beside.objects[k].position.set(p[o], p[o + 1], p[o + 2]);
-        beside.objects[k].quaternion.set(p[o + 3], p[o + 4], p[o + 5], p[o + 6]);
-      }
-    }
+    for (const name in motions) place(motions[name], i);
+    if (beside) place(beside, i);
     if (contacts) {
       const c = contacts, m = c.count;
       for (let k = 0; k < m; k++) {
