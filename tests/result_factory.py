@@ -1,6 +1,7 @@
 """Results built by hand for the tests of the result schema, the plots and the 3-D view (no solve);
 a broad jump in the export's format from the real CMU model and training jump."""
 from __future__ import annotations
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
 from functools import lru_cache
 from typing import Any
@@ -41,12 +42,12 @@ SHARES = np.array([0.4, 0.3, 0.2, 0.1])  # of a foot's force: heel, ball, toe, p
 
 @lru_cache(maxsize=4)
 def _jump_arrays(stride: int) -> tuple[pin.Model, dict[str, np.ndarray]]:
-    from latentoc.jump.contact import MU, POINTS, FootGeometry, foot_points
+    from latentoc.jump.contact import MU, POINTS, foot_points
     from latentoc.jump.training import jump_model, training_jumps
 
     model, _ = jump_model()
     training = training_jumps()[0]
-    geom = FootGeometry.from_standing(model, training.Q[0])
+    geom = CMU_HUMANOID.geometry(model, training.Q[0])
     t, Q0 = training.t[::stride], training.Q[::stride]
     n, dt = len(t), float(t[1] - t[0])
     data = model.createData()

@@ -2,10 +2,11 @@
 import casadi as ca
 import numpy as np
 import pinocchio as pin
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.jump.contact import FootGeometry, point_forces
-from latentoc.jump.training import FOOT, TOE, jump_model, training_jumps
+from latentoc.jump.contact import point_forces
+from latentoc.jump.training import jump_model, training_jumps
 
 
 def test_pyramid_forces_are_unilateral_and_in_the_cone():
@@ -23,7 +24,7 @@ def test_point_forces_act_on_their_own_bodies():
 
     model, smap = jump_model()
     tr = training_jumps()[0]
-    geom = FootGeometry.from_standing(model, tr.Q[0])
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     sym = SymbolicModel(model)
     d = model.createData()
     rng = np.random.default_rng(5)
@@ -33,8 +34,8 @@ def test_point_forces_act_on_their_own_bodies():
     gen_sym = np.array(point_generalized_force(sym, geom, ca.DM(q), fs)).ravel()
     # reference: external point forces through rnea (f_ext in each joint's local frame)
     pin.framesForwardKinematics(model, d, q)
-    M = d.oMf[model.getFrameId(FOOT)]
-    T = d.oMf[model.getFrameId(TOE)]
+    M = d.oMf[model.getFrameId("lfoot")]
+    T = d.oMf[model.getFrameId("ltoes_end")]
     left = [M.translation + M.rotation @ geom.heel_offset, d.oMf[model.getFrameId("lfoot_end")].translation,
             T.translation, T.translation + T.rotation @ geom.pad_offset]
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
@@ -56,7 +57,7 @@ def test_numeric_foot_points_match_the_symbolic_ones():
 
     model, _ = jump_model()
     tr = training_jumps()[0]
-    geom = FootGeometry.from_standing(model, tr.Q[0])
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     sym_points = points_function(SymbolicModel(model), geom)
     d = model.createData()
     for i in (0, 40, 90):
@@ -65,13 +66,13 @@ def test_numeric_foot_points_match_the_symbolic_ones():
 
 
 def test_the_pad_lies_behind_the_toe_tip_on_the_ground_when_standing():
-    from latentoc.jump.contact import TOE_PAD, foot_points
+    from latentoc.jump.contact import foot_points
 
     model, _ = jump_model()
     q = training_jumps()[0].Q[0]
-    geom = FootGeometry.from_standing(model, q)
+    geom = CMU_HUMANOID.geometry(model, q)
     d = model.createData()
     pin.framesForwardKinematics(model, d, q)
     heel, ball, toe, pad = foot_points(model, d, geom).T
-    np.testing.assert_allclose(pad - toe, [-TOE_PAD, 0.0, min(ball[2], toe[2]) - toe[2]], atol=1e-12)
+    np.testing.assert_allclose(pad - toe, [-0.01, 0.0, min(ball[2], toe[2]) - toe[2]], atol=1e-12)
     assert heel[0] < ball[0] < pad[0] < toe[0]

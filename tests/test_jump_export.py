@@ -2,8 +2,9 @@
 the NLP's nodes and samples (corrected_edge_weights)."""
 import numpy as np
 import pinocchio as pin
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
-from latentoc.jump.contact import FootGeometry, generator_columns, point_jacobians
+from latentoc.jump.contact import generator_columns, point_jacobians
 from latentoc.jump.export import corrected_edge_weights
 from latentoc.jump.training import jump_model, training_jumps
 
@@ -14,7 +15,7 @@ def _static():
     d = model.createData()
     z = np.zeros(model.nv)
     tau = pin.rnea(model, d, q, z, z)
-    C = generator_columns(point_jacobians(model, d, q, FootGeometry.from_standing(model, q)), 0.4)
+    C = generator_columns(point_jacobians(model, d, q, CMU_HUMANOID.geometry(model, q)), 0.4)
     return model, tau, C
 
 

@@ -1,6 +1,7 @@
 """Phase timing of the symmetric training jump (Sect. 4.2: 1.3 s), checked against the data."""
 import numpy as np
 
+from latentoc.jump.legged_robot import CMU_HUMANOID
 from latentoc.jump.phases import toe_heights, training_phases
 from latentoc.mocap.jumps import detect_jumps
 from latentoc.jump.training import jump_model, training_jumps
@@ -9,12 +10,13 @@ from latentoc.jump.training import jump_model, training_jumps
 def test_phases_and_grid():
     model, smap = jump_model()
     tr = training_jumps()[0]
-    ph = training_phases(model, tr)
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
+    ph = training_phases(model, tr, geom, schedule=False)
     assert np.isclose(ph.duration, 1.3)
     # toe-off: the toe tip's lowest point just before the feet leave (detected 0.350 s), after
     # which it only rises; touchdown: the toe tip back at its standing height
     j = detect_jumps(model, tr.Q)[0]
-    z = toe_heights(model, tr.Q)
+    z = toe_heights(model, tr.Q, geom)
     i0, i1 = int(np.argmin(np.abs(tr.t - ph.takeoff))), int(np.argmin(np.abs(tr.t - ph.touchdown)))
     assert tr.t[j.takeoff] - 0.1 <= ph.takeoff < tr.t[j.takeoff] and 0.29 < ph.takeoff < 0.33
     assert np.all(np.diff(z[i0:j.takeoff + 1]) > 0) and z[i0] <= z[i0 - 1]
@@ -30,13 +32,13 @@ def test_contact_schedule_follows_the_training_heel_and_ball():
     checked against their heights recomputed from the frames with numeric Pinocchio."""
     import pinocchio as pin
 
-    from latentoc.jump.contact import FootGeometry, foot_points
+    from latentoc.jump.contact import foot_points
     from latentoc.jump.phases import CONTACT_HEIGHT
 
     model, _ = jump_model()
     tr = training_jumps()[0]
-    geom = FootGeometry.from_standing(model, tr.Q[0])
-    ph = training_phases(model, tr, geom=geom)
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
+    ph = training_phases(model, tr, geom)
     d = model.createData()
     H = np.array([foot_points(model, d, geom)[2] for q in tr.Q if pin.framesForwardKinematics(model, d, q) is None])
     H -= H[0]
@@ -51,4 +53,4 @@ def test_contact_schedule_follows_the_training_heel_and_ball():
     t = np.array([0.0, ph.heel_off + 0.01, ph.takeoff, ph.heel_strike])
     assert ph.loaded("heel", t).tolist() == [True, False, False, True]
     assert ph.loaded("toe", t).all()
-    assert training_phases(model, tr).loaded("heel", t).all()  # no geometry, no schedule
+    assert training_phases(model, tr, geom, schedule=False).loaded("heel", t).all()  # no schedule

@@ -1,5 +1,6 @@
 """The broad-jump problem kind (latentoc.jump.problem): [options], warm and cold starts, set-up."""
 from types import SimpleNamespace
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
 import dataclasses
 
@@ -189,15 +190,14 @@ def test_plant_training_learns_and_limits_the_planted_jump():
     test_planting.py), whose largest change per leg joint the set-up keeps, and the Eq. 34 limits
     are the planted jump's own inverse dynamics: every torque of its B-spline fit lies inside them."""
     from latentoc.jump.cleaning import planted_training
-    from latentoc.jump.contact import FootGeometry
     from latentoc.jump.phases import training_phases
     from latentoc.jump.training import jump_model, training_jumps
 
     js = jp.setup(0, stride=3, plant=True)
     model, smap = jump_model()
     tr = training_jumps(0)[0]
-    geom = FootGeometry.from_standing(model, tr.Q[0])
-    planted = planted_training(model, smap, tr, training_phases(model, tr, geom=geom), geom)
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
+    planted = planted_training(model, smap, tr, training_phases(model, tr, geom), geom)
     np.testing.assert_allclose(js.training.Y, planted.training.Y, atol=0)
     np.testing.assert_allclose(js.gpdm.Y, planted.training.Y[::3], atol=0)
     assert js.planted is not None and js.planted.change_deg == planted.change_deg

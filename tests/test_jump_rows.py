@@ -17,7 +17,6 @@ from scipy.integrate import cumulative_trapezoid
 from jump_reference import (SAGITTAL, flight_base, foot_points, full_state, generalized_force, joint_motion,
                             mass_of, momentum, pitch_rate_for, point_forces, polygon_rows)
 from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
-from latentoc.jump.contact import TOE_PAD
 from latentoc.jump.nlp import build_nlp
 from latentoc.jump.zmp import G
 
@@ -86,7 +85,7 @@ def _contact_family_against_pinocchio(sj, family_name: str, times: np.ndarray, b
         np.testing.assert_allclose(g[at & (names == "cop_front")], my0, atol=1e-10)
         back = g[at & np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
         rear = heel[0] if ph.loaded("heel", np.array([t]))[0] else ball[0] if ph.loaded("ball", np.array([t]))[0] \
-            else toe[0] - TOE_PAD
+            else toe[0] - 0.01
         np.testing.assert_allclose(back, (toe[0] - rear) * fz - my0, atol=1e-10)
         # heights above the standing ones, sideways offsets from them (the standing frame, numeric)
         d0 = model.createData()

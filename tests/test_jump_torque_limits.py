@@ -1,7 +1,7 @@
 """Training inverse dynamics: NNLS contact forces reproduce the base wrench where they can."""
 import numpy as np
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
-from latentoc.jump.contact import FootGeometry
 from latentoc.jump.phases import training_phases
 from latentoc.jump.torque_limits import estimate_training_dynamics
 from latentoc.jump.training import jump_model, training_jumps
@@ -10,8 +10,8 @@ from latentoc.jump.training import jump_model, training_jumps
 def test_training_forces_and_limits():
     model, smap = jump_model()
     tr = training_jumps()[0]
-    ph = training_phases(model, tr)
-    geom = FootGeometry.from_standing(model, tr.Q[0])
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
+    ph = training_phases(model, tr, geom, schedule=False)
     contact = (tr.t <= ph.takeoff) | (tr.t >= ph.touchdown)
     td = estimate_training_dynamics(model, smap, tr, geom, contact, margin=0.0)
     W = 63.86 * 9.81
@@ -38,11 +38,10 @@ def test_training_forces_and_limits():
 def test_schedule_unloads_the_heel_after_heel_off():
     """With the contact schedule the heel carries no force after heel-off (and the ball none
     after ball-off); the toe alone must then balance what it can."""
-    from latentoc.jump.contact import FootGeometry as FG
     model, smap = jump_model()
     tr = training_jumps()[0]
-    geom = FG.from_standing(model, tr.Q[0])
-    ph = training_phases(model, tr, geom=geom)
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
+    ph = training_phases(model, tr, geom)
     contact = (tr.t <= ph.takeoff) | (tr.t >= ph.touchdown)
     loaded = np.column_stack([ph.loaded(k, tr.t) for k in ("heel", "ball", "toe", "pad")])
     td = estimate_training_dynamics(model, smap, tr, geom, contact, loaded=loaded)

@@ -1,5 +1,6 @@
 """1 kHz verification machinery on an exactly balanced static stance, and (opt-in) a quick solve."""
 import os
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
 import numpy as np
 import pinocchio as pin
@@ -7,6 +8,7 @@ import pytest
 
 from latentoc.jump.contact import FootGeometry
 from latentoc.jump.training import jump_model, training_jumps
+from latentoc.jump.export import contact_geometry
 from latentoc.jump.verify import sagittal_contact_wrench, verify
 
 
@@ -14,7 +16,7 @@ def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
     model, _ = jump_model()
     tr = training_jumps()[0]
     q = tr.Q[0]
-    geom = FootGeometry.from_standing(model, q)
+    geom = CMU_HUMANOID.geometry(model, q)
     d = model.createData()
     z = np.zeros(model.nv)
     tau = pin.rnea(model, d, q, z, z)
@@ -26,7 +28,7 @@ def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
     tj = tau[6:] - (J.T @ wrench[0])[6:]
     return model, {"t": np.linspace(0, 0.004, n), "q": np.tile(q, (n, 1)), "v": np.zeros((n, model.nv)),
                    "a": np.zeros((n, model.nv)), "wrench": wrench, "contact": np.ones(n, dtype=int),
-                   "heel_offset": geom.heel_offset, "pad_offset": geom.pad_offset, "touchdown": 0.0, "settle": 0.0,
+                   **contact_geometry(geom), "touchdown": 0.0, "settle": 0.0,
                    "tau_min": np.minimum(tj, 0) - 1.0, "tau_max": np.maximum(tj, 0) + 1.0}
 
 
@@ -100,7 +102,7 @@ def test_point_forces_on_their_bodies_balance_a_static_stance():
     model, arrays = _static_arrays()
     q = arrays["q"][0]
     d = model.createData()
-    C = generator_columns(point_jacobians(model, d, q, FootGeometry(arrays["heel_offset"], arrays["pad_offset"])), 0.4)
+    C = generator_columns(point_jacobians(model, d, q, FootGeometry.from_result(arrays)), 0.4)
     z = np.zeros(model.nv)
     tau = pin.rnea(model, d, q, z, z)
     lam, res = nnls(C[[0, 2, 4]], tau[[0, 2, 4]])
@@ -127,7 +129,7 @@ def test_loaded_support_margin_follows_the_schedule():
     assert np.isclose(r["cop_margin_loaded"], r["cop_margin"]) and r["cop_margin"] > 0
     fx, fz, my = arrays["wrench"][0, [0, 2, 4]]
     arrays["loaded"][:, :2] = 0
-    r = verify(model, arrays, toe_pad=0.01)
+    r = verify(model, arrays)
     assert np.isclose(r["cop_margin_loaded"], 0.01 - my / fz) and r["cop_margin_loaded"] < 0
 
 
@@ -159,7 +161,7 @@ def test_eq33_feet_distance_of_a_translating_stance():
         assert np.isclose(r[key], value, rtol=1e-9, atol=1e-15), key
     d = model.createData()
     pin.framesForwardKinematics(model, d, q[0])
-    z = foot_points(model, d, FootGeometry(arrays["heel_offset"], arrays["pad_offset"]))[2]
+    z = foot_points(model, d, FootGeometry.from_result(arrays))[2]
     assert np.isclose(r["max_loaded_height"], max(abs(z[0]), abs(z[2])), rtol=0, atol=1e-12)
     assert np.isclose(r["min_unloaded_height"], min(z[1], z[3]), rtol=0, atol=1e-12)
     still = verify(model, {**_static_arrays()[1], "point_forces": F})

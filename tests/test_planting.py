@@ -3,6 +3,7 @@ their targets, the other frames keep the capture, and each frame's change is the
 weighted change lies in the row space of the constraint Jacobian: no move along the constraint's
 null space makes it smaller)."""
 from __future__ import annotations
+from latentoc.jump.legged_robot import CMU_HUMANOID
 
 import numpy as np
 import pinocchio as pin
@@ -87,14 +88,14 @@ def test_cleaned_training_keeps_the_feet_on_their_ground_points():
     points (the toes flat) are on their standing (or landing) ground points to 1e-9 m, also while
     the captured toes rolled on their tip; while the heel is loaded the heel too."""
     from latentoc.jump.cleaning import planted_training
-    from latentoc.jump.contact import POINTS, FootGeometry, foot_points
+    from latentoc.jump.contact import POINTS, foot_points
     from latentoc.jump.phases import training_phases
     from latentoc.jump.training import jump_model, training_jumps
 
     model, smap = jump_model()
     tr = training_jumps(0)[0]
-    geom = FootGeometry.from_standing(model, tr.Q[0])
-    ph = training_phases(model, tr, geom=geom)
+    geom = CMU_HUMANOID.geometry(model, tr.Q[0])
+    ph = training_phases(model, tr, geom)
     pt = planted_training(model, smap, tr, ph, geom)
     d = model.createData()
     P = []

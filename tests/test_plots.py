@@ -279,7 +279,7 @@ def test_every_contact_point_of_the_jump_is_drawn(tmp_path):
     assert shown.all(axis=0).sum() == 0 and shown.any(axis=0).all()  # each point loaded at some time, not always
     assert np.array_equal(np.isfinite(s["point_ratio"]), shown)
     assert np.allclose(s["point_ratio"][shown], np.abs(F[..., 0])[shown] / F[..., 1][shown])
-    geom = FootGeometry(traj["heel_offset"], traj["pad_offset"])
+    geom = FootGeometry.from_result(traj)
     data = model.createData()
     for i in range(0, len(traj["t"]), 20):
         pin.framesForwardKinematics(model, data, traj["q"][i])

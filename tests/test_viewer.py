@@ -90,7 +90,7 @@ def test_skeleton_capsules_lie_on_the_bones():
 def jumps_own_points(model: pin.Model, traj: dict, Q: np.ndarray) -> np.ndarray:
     """(n, 8, 3): the left foot's heel, ball, toe, pad by the jump's own code
     (:func:`latentoc.jump.contact.foot_points`), then their mirror images (the right foot)."""
-    geom = FootGeometry(traj["heel_offset"], traj["pad_offset"])
+    geom = FootGeometry.from_result(traj)
     data = model.createData()
     out = []
     for q in Q:

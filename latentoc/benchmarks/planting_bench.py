@@ -26,10 +26,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..jump.base import base_to_freeflyer
-from ..jump.contact import FRAMES, POINTS, foot_points, joint_embedding
+from ..jump.cleaning import leg_joints
+from ..jump.contact import POINTS, foot_points, joint_embedding
 from ..jump.problem import setup
 from ..jump.torque_limits import contact_torques
-from ..jump.training import TOE
 from ..kinematics import point_jacobian
 from ..latent.gp_layer import GPLayer
 from ..spline import BSpline
@@ -47,9 +47,7 @@ def _modes(ph, t: np.ndarray) -> dict[str, np.ndarray]:
 
 def _left_leg(model: pin.Model, smap) -> np.ndarray:
     """Positions in the learned coordinates of the left leg's joints (hip to toes)."""
-    joint = model.frames[model.getFrameId(TOE)].parentJoint
-    q_idx = {model.joints[j].idx_q for j in model.supports[joint] if model.joints[j].nq == 1}
-    return np.array([k for k, q in enumerate(smap.learned_q) if int(q) in q_idx], int)
+    return np.array(sorted(smap.learned_names.index(n) for n in leg_joints(model)), int)
 
 
 def _gp_motion(js, t: np.ndarray) -> list[np.ndarray]:
@@ -112,7 +110,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
                 p = pts[i, k]
                 rows.append(plant_weight * (p - np.r_[ground[name], 0.0]))
                 if jacobian:
-                    Jp = point_jacobian(model, d, model.getFrameId(FRAMES[name]), p)
+                    Jp = point_jacobian(model, d, model.getFrameId(geom.points[k].frame), p)
                     dp_base = np.column_stack([[1, 0, 0], [0, 0, 1], np.cross([0, 1, 0], p - q[:3])])
                     dp_leg = (Jp[:, 6:] @ E)[:, leg]
                     J.append(plant_weight * np.hstack([np.kron(dp_base, Bb[i]), np.kron(dp_leg, Br[i])]))

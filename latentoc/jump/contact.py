@@ -1,14 +1,13 @@
 """Foot contact: points and contact forces (Sect. 4.2).
 
-Contact points of the left foot (the right one is its mirror image):
+Each foot has four contact points, declared per robot (:mod:`.legged_robot`; the right foot is the
+left's mirror image); their roles in the rows:
 
-* ``ball`` - the end of the foot bone (frame ``lfoot_end``);
-* ``toe`` - the end of the toes bone (frame ``ltoes_end``; ~1 mm above the others standing: the
-  contact rows hold each point's height above its standing one);
-* ``heel`` - a point fixed in the foot body (frame ``lfoot``, at the ankle): the ankle
-  dropped vertically to the ground in the first (standing) training frame;
-* ``pad`` - a point fixed in the toes body ``TOE_PAD`` behind the toe tip on the ground when
-  standing: the toes' contact patch, so that a foot on its toes alone can hold a moment (with
+* ``heel`` - the rearmost point (the CMU humanoid's: its ankle dropped to the ground standing);
+* ``ball`` - under the front of the foot (the CMU's end of the foot bone);
+* ``toe`` - the toe tip, the point the stance and the landing are pinned at;
+* ``pad`` - a point just behind the toe tip on the ground standing (the CMU's 1 cm behind it, on
+  its toes body): the toes' contact patch, so that a foot on its toes alone can hold a moment (with
   the toe tip alone every base row of such a sample would ask the motion for none).
 
 In contact (stance and landing) the toe tip stays near its ground point ``x_pin`` at its standing height
@@ -33,12 +32,10 @@ import pinocchio as pin
 from ..dynamics import SymbolicModel
 from ..kinematics import point_jacobian
 from ..mocap.symmetry import SymmetryMap
-from .training import BALL, FOOT, TOE
 
 POINTS = ("heel", "ball", "toe", "pad")
-FRAMES = {"heel": FOOT, "ball": BALL, "toe": TOE, "pad": TOE}  # the left frame each point is fixed in
+CMU_BODY = {"heel": 0, "ball": 1, "toe": 2, "pad": 2}  # a point's body among a foot's three in a CMU-layout result
 MU = 0.4
-TOE_PAD = 0.01  # m behind the toe tip: the toes' contact patch (the pad point)
 EDGES = 2 * len(POINTS)  # friction-pyramid edge weights per foot
 
 
@@ -63,35 +60,50 @@ class ContactPoint:
 
 @dataclass
 class FootGeometry:
-    """Heel point in the ``lfoot`` frame, pad point in the ``ltoes_end`` frame."""
+    """The left foot's points in :data:`POINTS`' order, each fixed in a frame, and each of those
+    frames' mirror partner on the right (built from a problem's ``[robot]``,
+    :meth:`.legged_robot.RobotDeclaration.geometry`)."""
 
-    heel_offset: np.ndarray
-    pad_offset: np.ndarray
+    points: tuple[ContactPoint, ...]
+    right: dict[str, str]  # left frame -> its mirror partner
     footprint: np.ndarray | None = None  # world heel, ball, toe, pad standing (3 x 4)
 
-    def points(self) -> tuple[ContactPoint, ...]:
-        """The left foot's points in :data:`POINTS`' order, each in its frame."""
-        offsets = {"heel": self.heel_offset, "pad": self.pad_offset}
-        return tuple(ContactPoint(p, FRAMES[p], offsets.get(p)) for p in POINTS)
+    def offset(self, name: str) -> np.ndarray:
+        """The point ``name``'s offset in its frame (zeros at the frame's origin)."""
+        c = self.points[POINTS.index(name)]
+        return np.zeros(3) if c.offset is None else np.asarray(c.offset, float)
 
-    @staticmethod
-    def side_frame(side: str, frame: str) -> str:
+    @property
+    def pad_setback(self) -> float:
+        """How far the pad stands behind the toe tip (m, to the nanometre): the rear edge of the centre
+        of pressure while the toes carry the foot alone (:mod:`.rows.contact`)."""
+        assert self.footprint is not None, "the pad's setback is measured on the standing footprint"
+        return round(float(self.footprint[0, 2] - self.footprint[0, 3]), 9)
+
+    @property
+    def heel_offset(self) -> np.ndarray:
+        return self.offset("heel")
+
+    @property
+    def pad_offset(self) -> np.ndarray:
+        return self.offset("pad")
+
+    def side_frame(self, side: str, frame: str) -> str:
         """The frame of the left foot's ``frame`` on ``side`` ("l" or "r"): its mirror partner on the right."""
-        return frame if side == "l" else "r" + frame[1:]
+        return frame if side == "l" else self.right[frame]
 
     @classmethod
-    def from_standing(cls, model: pin.Model, q_stand: np.ndarray) -> "FootGeometry":
-        d = model.createData()
-        pin.framesForwardKinematics(model, d, q_stand)
-        M = d.oMf[model.getFrameId(FOOT)]
-        ground = min(d.oMf[model.getFrameId(BALL)].translation[2], d.oMf[model.getFrameId(TOE)].translation[2])
-        heel = M.translation.copy()
-        heel[2] = ground
-        T = d.oMf[model.getFrameId(TOE)]
-        pad = T.translation + np.array([-TOE_PAD, 0.0, ground - T.translation[2]])
-        geom = cls(M.rotation.T @ (heel - M.translation), T.rotation.T @ (pad - T.translation))
-        geom.footprint = foot_points(model, d, geom)
-        return geom
+    def from_result(cls, arrays: Any) -> "FootGeometry":
+        """The geometry a contact result exports: ``contact_frames`` (the left foot's then the right's:
+        one per point, or the foot, ball and toes bodies of the CMU layout) and ``{point}_offset``."""
+        frames = [str(f) for f in np.asarray(arrays["contact_frames"])]
+        half = len(frames) // 2
+        body = {p: POINTS.index(p) for p in POINTS} if half == len(POINTS) else CMU_BODY
+        pts = []
+        for p in POINTS:
+            off = np.asarray(arrays[f"{p}_offset"], float) if f"{p}_offset" in arrays else None
+            pts.append(ContactPoint(p, frames[body[p]], off))
+        return cls(tuple(pts), {frames[body[p]]: frames[half + body[p]] for p in POINTS})
 
 
 def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
@@ -99,7 +111,7 @@ def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
     q = ca.SX.sym("q", sym.nq)
     placed: dict[str, Any] = {}
     columns = []
-    for c in geom.points():
+    for c in geom.points:
         if c.frame not in placed:  # each frame placed once (its expression shared by its points)
             placed[c.frame] = sym.frame_placement(c.frame)(q)
         p, R = placed[c.frame]
@@ -152,7 +164,7 @@ def point_generalized_force(sym: SymbolicModel, geom: FootGeometry, q, forces) -
     P = points_function(sym, geom)(q)
     gen: Any = 0
     for side in "lr":
-        for k, c in enumerate(geom.points()):
+        for k, c in enumerate(geom.points):
             name = geom.side_frame(side, c.frame)
             o = sym.frame_placement(name)(q)[0]
             p = P[:, k] if side == "l" else ca.DM(MIRROR) @ P[:, k]
@@ -167,7 +179,7 @@ def foot_points(model: pin.Model, data: pin.Data, geom: FootGeometry) -> np.ndar
     """Numeric (3, 4): world heel, ball, toe, pad of the left foot as columns (frames already
     placed), the numeric twin of :func:`points_function`."""
     columns = []
-    for c in geom.points():
+    for c in geom.points:
         M = data.oMf[model.getFrameId(c.frame)]
         columns.append(M.translation if c.offset is None else M.translation + M.rotation @ c.offset)
     return np.column_stack(columns)
@@ -182,7 +194,7 @@ def point_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, geom: FootG
     out = np.zeros((len(POINTS), 3, model.nv))
     left = foot_points(model, data, geom).T
     for side in "lr":
-        for k, c in enumerate(geom.points()):
+        for k, c in enumerate(geom.points):
             p = left[k] if side == "l" else MIRROR @ left[k]
             out[k] += point_jacobian(model, data, model.getFrameId(geom.side_frame(side, c.frame)), p)
     return out

@@ -17,13 +17,13 @@ from scipy.optimize import nnls
 
 from ..latent.gp_layer import Layer
 from .base import base_to_freeflyer
-from .contact import EDGES, POINTS, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
+from .contact import EDGES, POINTS, FootGeometry, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 from .flight import ballistic_base, flight_functions
 from .nlp import JumpNLP
 from .phases import Phases
 from .robot import JumpRobot
 
-__all__ = ["trajectory", "corrected_edge_weights"]
+__all__ = ["trajectory", "contact_geometry", "corrected_edge_weights"]
 
 SAGITTAL = [0, 2, 4]
 
@@ -100,12 +100,19 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
             "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
             "loaded": loaded.astype(np.int8), **path, "control_points": P,
             "node_t": node_t, "node_wrench": node_w, "node_lambda": lam_nodes.T,
-            "contact_frames": np.array(["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]),
-            "contact_points": np.array(POINTS), "heel_offset": robot.geom.heel_offset,
-            "pad_offset": robot.geom.pad_offset,
+            **contact_geometry(robot.geom),
             "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,
             "tau_min": robot.limits.tau_min, "tau_max": robot.limits.tau_max, "friction": mu,
             "model": model.saveToString()}
+
+
+def contact_geometry(geom: FootGeometry) -> dict[str, np.ndarray]:
+    """The result's foot: the frames of the heel, ball and toe tip (the pad shares the toe tip's),
+    left then right, each point's offset in its frame and the pad's setback."""
+    left = [geom.points[POINTS.index(p)].frame for p in ("heel", "ball", "toe")]
+    return {"contact_frames": np.array(left + [geom.side_frame("r", f) for f in left]),
+            "contact_points": np.array(POINTS), **{f"{p}_offset": geom.offset(p) for p in POINTS},
+            "pad_setback": np.array(geom.pad_setback)}
 
 
 def corrected_edge_weights(C: np.ndarray, tau: np.ndarray, lam0: np.ndarray, free: np.ndarray) -> np.ndarray:

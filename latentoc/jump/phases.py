@@ -29,7 +29,7 @@ import pinocchio as pin
 
 from ..mocap.jumps import detect_jumps
 from .contact import FootGeometry, foot_points
-from .training import FOOT, TOE, JumpTraining
+from .training import JumpTraining
 
 CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
 
@@ -95,14 +95,13 @@ class Phases:
                 "land": np.linspace(self.touchdown, self.duration, n_land)}
 
 
-def toe_heights(model: pin.Model, Q: np.ndarray) -> np.ndarray:
-    """Height of the left toe tip (frame ``ltoes_end``) in every configuration."""
+def toe_heights(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
+    """Height of the left toe tip in every configuration."""
     d = model.createData()
-    fid = model.getFrameId(TOE)
     out = np.zeros(len(Q))
     for i, q in enumerate(Q):
         pin.framesForwardKinematics(model, d, q)
-        out[i] = d.oMf[fid].translation[2]
+        out[i] = foot_points(model, d, geom)[2, 2]
     return out
 
 
@@ -131,15 +130,15 @@ def contact_schedule(model: pin.Model, tr: JumpTraining, geom: FootGeometry, tak
     return out
 
 
-def training_phases(model: pin.Model, tr: JumpTraining, fps: float = 120.0,
-                    geom: FootGeometry | None = None) -> Phases:
-    """Phases of a symmetric training jump: toe-off, toe touchdown, settle and, with ``geom``,
+def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, fps: float = 120.0,
+                    schedule: bool = True) -> Phases:
+    """Phases of a symmetric training jump: toe-off, toe touchdown, settle and, with ``schedule``,
     the heel and ball contact schedule (see module doc)."""
     jumps = detect_jumps(model, tr.Q, fps)
     if not jumps:
         raise ValueError("no jump detected in the training motion")
     j = jumps[0]
-    z = toe_heights(model, tr.Q)
+    z = toe_heights(model, tr.Q, geom)
     lo = max(0, j.takeoff - int(round(0.1 * fps)))
     i_off = lo + int(np.argmin(z[lo:j.takeoff + 1]))
     down = np.where(z[j.touchdown:] <= z[0])[0]
@@ -149,13 +148,12 @@ def training_phases(model: pin.Model, tr: JumpTraining, fps: float = 120.0,
     for i in range(i_td, len(tr.Q)):
         pin.framesForwardKinematics(model, d, tr.Q[i])
         c = pin.centerOfMass(model, d, tr.Q[i])
-        heel_x = d.oMf[model.getFrameId(FOOT)].translation[0]
-        toe_x = d.oMf[model.getFrameId(TOE)].translation[0]
-        if heel_x <= c[0] <= toe_x:
+        heel, _, toe, _ = foot_points(model, d, geom)[0]
+        if heel <= c[0] <= toe:
             settle = tr.t[i]
             break
     if settle is None:
         settle = tr.t[-1]
     takeoff, touchdown = float(tr.t[i_off]), float(tr.t[i_td])
-    sched = contact_schedule(model, tr, geom, takeoff, touchdown) if geom is not None else {}
+    sched = contact_schedule(model, tr, geom, takeoff, touchdown) if schedule else {}
     return Phases(takeoff, touchdown, float(settle), tr.duration, **sched)

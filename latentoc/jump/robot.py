@@ -16,8 +16,7 @@ from ..dynamics import SymbolicModel
 from ..mocap.symmetry import SymmetryMap
 from .base import base_function
 from .contact import POINTS, FootGeometry, joint_embedding, points_function
-from .torque_limits import TrainingDynamics
-from .training import RIGHT_TOE, TOE
+from .torque_limits import TorqueLimits, TrainingDynamics
 from .zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]  # x force, z force, y moment of the base rows
@@ -30,7 +29,7 @@ class JumpRobot:
     sym: SymbolicModel
     smap: SymmetryMap
     geom: FootGeometry
-    limits: TrainingDynamics
+    limits: TrainingDynamics | TorqueLimits
     mu: float
     mass: float
 
@@ -62,7 +61,8 @@ class JumpRobot:
         """Positions in :attr:`active` of the joints no foot force enters (trunk, neck, head,
         arms): their torque is the motion's alone, known without the force split."""
         m = self.sym.model
-        legs = {j for f in (TOE, RIGHT_TOE) for j in m.supports[m.frames[m.getFrameId(f)].parentJoint]}
+        frames = {self.geom.side_frame(side, c.frame) for c in self.geom.points for side in "lr"}
+        legs = {j for f in frames for j in m.supports[m.frames[m.getFrameId(f)].parentJoint]}
         joint_of_v = np.concatenate([[j] * m.joints[j].nv for j in range(1, m.njoints)])
         return np.array([i for i, a in enumerate(self.active) if joint_of_v[6 + a] not in legs], int)
 

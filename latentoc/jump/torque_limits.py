@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import nnls
 
+from ..errors import ProblemError
 from ..spline import BSpline
 from .base import base_to_freeflyer
 from .contact import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
@@ -36,6 +37,26 @@ class TrainingDynamics:
     base_residual: np.ndarray
     tau_min: np.ndarray
     tau_max: np.ndarray
+
+
+@dataclass(frozen=True)
+class TorqueLimits:
+    """Joint torque limits (nv - 6) from the robot description."""
+
+    tau_min: np.ndarray
+    tau_max: np.ndarray
+
+
+def urdf_torque_limits(model: pin.Model) -> TorqueLimits:
+    """The model's effort limits |tau| <= effort of its actuated joints (the URDF's ``<limit effort>``);
+    a ProblemError naming ``robot.limits`` if a joint has none."""
+    effort = np.asarray(model.effortLimit[6:], float)
+    missing = [model.names[j] for j in range(2, model.njoints)
+               if not 0 < effort[model.joints[j].idx_v - 6] < 1e30]
+    if missing:
+        raise ProblemError(f"key 'robot.limits': \"urdf\" needs an effort limit on every joint; {missing[0]!r} "
+                           f"has none ({len(missing)} joints without)")
+    return TorqueLimits(-effort, effort.copy())
 
 
 def smoothed_motion(tr: JumpTraining, E: np.ndarray, n_control: int = 40):

@@ -25,12 +25,7 @@ from ..mocap.anthropometry import cmu_inertias
 from ..mocap.skeleton_model import build_model
 from ..mocap.symmetry import SymmetryMap, symmetrized_skeleton
 from .base import base_to_freeflyer, freeflyer_to_base
-
-BALL = "lfoot_end"
-TOE = "ltoes_end"
-RIGHT_TOE = "rtoes_end"  # the mirror image of TOE
-FOOT = "lfoot"
-
+from .legged_robot import CMU_HUMANOID, RobotDeclaration
 
 @lru_cache(maxsize=2)
 def jump_model(mass: float = 63.86, height: float = 1.75) -> tuple[pin.Model, SymmetryMap]:
@@ -61,25 +56,26 @@ class JumpTraining:
         return float(self.t[-1] - self.t[0])
 
 
-def symmetric_motion(Q: np.ndarray, t: np.ndarray, model: pin.Model, smap: SymmetryMap) -> JumpTraining:
-    """Symmetrise captured configurations; ground at z = 0, starting toe tip at x = 0."""
+def symmetric_motion(Q: np.ndarray, t: np.ndarray, model: pin.Model, smap: SymmetryMap,
+                     robot: RobotDeclaration = CMU_HUMANOID) -> JumpTraining:
+    """Symmetrise captured configurations; ground (the lowest of the foot's fixed points) at z = 0,
+    starting toe tip at x = 0."""
     Y = smap.to_learned(Q).copy()
     Y[:, antisymmetric_centre(smap)] = 0.0
     base = freeflyer_to_base(Q[:, :7])
     Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
-    d = model.createData()
-    pin.framesForwardKinematics(model, d, Qs[0])
-    ball0 = d.oMf[model.getFrameId(BALL)].translation.copy()
-    toe0 = d.oMf[model.getFrameId(TOE)].translation.copy()
-    base[:, 0] -= toe0[0]
-    base[:, 1] -= min(ball0[2], toe0[2])
+    fp = robot.geometry(model, Qs[0]).footprint
+    assert fp is not None
+    base[:, 0] -= fp[0, 2]
+    base[:, 1] -= min(fp[2, k] for k, p in enumerate(robot.foot) if not p.ground)
     Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
     return JumpTraining(np.asarray(t, float) - t[0], Y, base, Qs)
 
 
-def training_jumps(which: str | int = 0) -> list[JumpTraining]:
-    """Symmetric training jumps of take 01_01: ``0`` (the paper's single jump) or ``"all"``."""
+def training_jumps(which: str | int = 0, robot: RobotDeclaration = CMU_HUMANOID) -> list[JumpTraining]:
+    """Symmetric training jumps of take 01_01: ``0`` (the paper's single jump) or ``"all"``, with the
+    CMU humanoid's feet as ``robot`` declares them."""
     model, smap = jump_model()
     seqs = broad_jump_sequences()
     chosen = seqs if which == "all" else [seqs[int(which)]]
-    return [symmetric_motion(Q, t, model, smap) for t, Q in chosen]
+    return [symmetric_motion(Q, t, model, smap, robot) for t, Q in chosen]

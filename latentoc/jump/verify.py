@@ -44,13 +44,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import POINTS, TOE_PAD, FootGeometry, foot_points, point_jacobians
+from .contact import POINTS, FootGeometry, foot_points, point_jacobians
 from ..intervals import runs
 from ..kinematics import point_jacobian
 from ..support_polygon import feet_polygon
-from .training import RIGHT_TOE, TOE
 from .zmp import G, zmp
 
+PAD_SETBACK = 0.01  # m: the pad's setback in results that do not record it (the CMU humanoid's)
 LOADED = 0.01  # of body weight: a point pushing harder than this is loaded
 
 
@@ -64,7 +64,7 @@ def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return w
 
 
-def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE_PAD) -> dict[str, np.ndarray]:
+def series(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict[str, np.ndarray]:
     """The hard constraints' slack at every sample (negative: violated), and what :func:`verify`
     sums up (module doc): ``torque`` (n, joints with a range; N m to the nearer limit), ``normal``
     (needed fz, N), ``friction`` (mu fz - |fx|, N), ``cop`` (m inside the loaded support),
@@ -73,15 +73,16 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
     not apply (flight; ZMP before touchdown, COM before settling)."""
     t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
     Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)
-    heel_off = np.asarray(arrays["heel_offset"])
     t_td, t_settle = float(arrays["touchdown"]), float(arrays["settle"])
     tmin, tmax = np.asarray(arrays["tau_min"]), np.asarray(arrays["tau_max"])
     d = model.createData()
     mass = sum(i.mass for i in model.inertias)
-    ids = {n: model.getFrameId(n) for n in (TOE, RIGHT_TOE)}
+    geom = FootGeometry.from_result(arrays)
+    toe_frame = geom.points[POINTS.index("toe")].frame
+    ids = {side: model.getFrameId(geom.side_frame(side, toe_frame)) for side in "lr"}
+    toe_pad = float(arrays.get("pad_setback", PAD_SETBACK))
     act = tmax - tmin > 1e-6
     points = np.asarray(arrays["point_forces"]) if "point_forces" in arrays else None
-    geom = FootGeometry(heel_off, np.asarray(arrays["pad_offset"]))
     loaded = np.asarray(arrays["loaded"]).astype(bool) if "loaded" in arrays else None
     n = len(t)
     nan = np.full(n, np.nan)
@@ -99,10 +100,10 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE
         else:
             pin.computeJointJacobians(model, d, q)
             pin.framesForwardKinematics(model, d, q)
-        JL = pin.getFrameJacobian(model, d, ids[TOE], pin.LOCAL_WORLD_ALIGNED)
-        JR = pin.getFrameJacobian(model, d, ids[RIGHT_TOE], pin.LOCAL_WORLD_ALIGNED)
+        JL = pin.getFrameJacobian(model, d, ids["l"], pin.LOCAL_WORLD_ALIGNED)
+        JR = pin.getFrameJacobian(model, d, ids["r"], pin.LOCAL_WORLD_ALIGNED)
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
-        out["toe_xz"][i] = d.oMf[ids[TOE]].translation[[0, 2]]
+        out["toe_xz"][i] = d.oMf[ids["l"]].translation[[0, 2]]
         if contact[i]:
             out["points"][i], out["point_velocity"][i] = _left_points(model, d, geom, v)
         gen: np.ndarray
@@ -145,7 +146,7 @@ def _left_points(model: pin.Model, d: pin.Data, geom: FootGeometry, v: np.ndarra
     """World positions (4 x 3) and velocities of the left foot's points (frames and joint Jacobians placed)."""
     P = foot_points(model, d, geom).T
     V = np.zeros_like(P)
-    for k, c in enumerate(geom.points()):
+    for k, c in enumerate(geom.points):
         V[k] = point_jacobian(model, d, model.getFrameId(c.frame), P[k]) @ v
     return P, V
 
@@ -181,10 +182,10 @@ def _min(x: np.ndarray) -> float:
     return float(np.nanmin(x)) if np.isfinite(x).any() else np.inf
 
 
-def verify(model: pin.Model, arrays: dict, mu: float = 0.4, toe_pad: float = TOE_PAD,
+def verify(model: pin.Model, arrays: dict, mu: float = 0.4,
            checked: dict[str, np.ndarray] | None = None) -> dict:
     """Verification numbers (module doc); ``checked``: :func:`series` of the same arrays, if made."""
-    sr = series(model, arrays, mu, toe_pad) if checked is None else checked
+    sr = series(model, arrays, mu) if checked is None else checked
     t = np.asarray(arrays["t"])
     contact = np.asarray(arrays["contact"]).astype(bool)
     W = sum(i.mass for i in model.inertias) * G

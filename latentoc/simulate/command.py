@@ -39,16 +39,16 @@ MIRROR_TOL = 1e-3  # m: right points vs the mirrored left ones
 FRICTION = 0.4  # a result without "friction"
 RADIUS, TIMESTEP, INTEGRATOR = 0.005, 0.0005, "implicitfast"  # sphere radius (m), MuJoCo step (s)
 # contact point -> (its frame among a foot's three: foot, foot end, toes end; its offset key)
-_POINTS = {"heel": (0, "heel_offset"), "ball": (1, None), "toe": (2, "toe_offset"), "pad": (2, "pad_offset")}
+_POINTS = {"heel": (0, "heel_offset"), "ball": (1, "ball_offset"), "toe": (2, "toe_offset"), "pad": (2, "pad_offset")}
 _MIRROR_WORLD = np.diag([1.0, -1.0, 1.0])  # the sagittal plane's mirror
 
 Contact = tuple[str, np.ndarray]
 
 
 def contact_points(trajectory: Mapping[str, Any], model: pin.Model, where: str
-                   ) -> tuple[list[Contact], list[Contact] | None, dict[str, str]]:
+                   ) -> tuple[list[Contact], list[Contact], dict[str, str]]:
     """The contact spheres (frame, offset) of a broad jump's ``trajectory`` (module doc), left foot
-    first, the landing-distance point (the left toe; None: the mean of all contacts) and the local
+    first, the landing-distance point (the left toe tip) and the local
     axis each right frame's offsets are mirrored along (:func:`mirror_axis`)."""
     missing = [k for k in ("contact_frames", "contact_points", "heel_offset", "pad_offset") if k not in trajectory]
     if missing:
@@ -64,15 +64,15 @@ def contact_points(trajectory: Mapping[str, Any], model: pin.Model, where: str
     if absent:
         raise ResultFileError(f"{where}: the model has no contact frame {absent[0]!r}")
     offsets = {k: np.asarray(trajectory.get(k, np.zeros(3)), dtype=float).reshape(3)
-               for k in ("heel_offset", "toe_offset", "pad_offset")}
+               for k in ("heel_offset", "ball_offset", "toe_offset", "pad_offset")}
     q0 = np.asarray(trajectory["q"][0], dtype=float)
     axes = {frames[3 + i]: mirror_axis(model, q0, frames[i], frames[3 + i]) for i in range(3)}
-    left = [(frames[i], offsets[key] if key else np.zeros(3)) for i, key in (_POINTS[p] for p in names)]
+    left = [(frames[i], offsets[key]) for i, key in (_POINTS[p] for p in names)]
     right = []
     for p, (_, offset) in zip(names, left):
         frame = frames[3 + _POINTS[p][0]]
         right.append((frame, offset * np.where(np.arange(3) == "xyz".index(axes[frame]), -1.0, 1.0)))
-    point = [(frames[2], offsets["toe_offset"])] if frames[2] == "ltoes_end" else None
+    point = [(frames[2], offsets["toe_offset"])]  # the toe tip: where the jump distance is measured
     return left + right, point, axes
 
 

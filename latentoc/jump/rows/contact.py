@@ -14,7 +14,7 @@ import casadi as ca
 import numpy as np
 
 from ...nlp.blocks import RobotBlock
-from ..contact import EDGES, TOE_PAD, point_forces, point_generalized_force, toe_wrench
+from ..contact import EDGES, point_forces, point_generalized_force, toe_wrench
 from ..robot import SAGITTAL_ROWS, JumpRobot, galilean
 from ..selection import POLYGON_EDGES
 from ..wiring import Rows, Wiring
@@ -64,7 +64,7 @@ def block(robot: JumpRobot, d: int) -> RobotBlock:
         "cop_front": my,
         "cop_heel": (toe[0] - heel[0]) * fz - my,
         "cop_ball": (toe[0] - P[0, 1]) * fz - my,
-        "cop_pad": TOE_PAD * fz - my,
+        "cop_pad": robot.geom.pad_setback * fz - my,
         # ZMP x = toe_x - my / fz (y = 0), as fz * rows(ZMP)
         "zmp_polygon": homogeneous_polygon_rows(heel, toe, ca.vertcat(toe[0] * fz - my, 0), fz),
         "com_polygon": symbolic_rows(heel, toe)(robot.sym.com(q)[:2] + ca.vertcat(u["b"][0], 0)),
