@@ -109,6 +109,9 @@ def test_bad_robot_declarations_are_refused_with_the_key_named():
     bad_frame = _declared(G1_ROBOT.replace('heel = { frame = "left_ankle_roll_link"', 'heel = { frame = "left_heel"'))
     with pytest.raises(ProblemError, match=r"robot\.foot\.heel.*'left_heel'"):
         bad_frame.geometry(g1, pin.neutral(g1))
+    swapped = _declared(G1_ROBOT.replace("[0.08, 0.0, -0.03]", "[0.115, 0.0, -0.03]"))  # the ball before the pad
+    with pytest.raises(ProblemError, match=r"robot\.foot.*heel, ball, pad, toe"):
+        swapped.geometry(g1, pin.neutral(g1))
     with pytest.raises(ProblemError, match=r"robot\.foot"):  # the feet's points not all declared
         _declared(G1_ROBOT.split("[robot.foot]")[0] + '[robot.foot]\nheel = { frame = "left_ankle_roll_link" }\n')
     with pytest.raises(ProblemError, match=r"robot\.mirror"):  # the mirror's strings do not name the joints

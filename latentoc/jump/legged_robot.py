@@ -94,6 +94,10 @@ class RobotDeclaration:
                 points.append(ContactPoint(k, p.frame, None if not any(p.offset) else np.asarray(p.offset, float)))
         geom = FootGeometry(tuple(points), {p.frame: self.right_frame(p.frame) for p in self.foot})
         geom.footprint = foot_points(model, d, geom)
+        x = dict(zip(POINTS, geom.footprint[0]))
+        if not x["heel"] < x["ball"] < x["pad"] < x["toe"]:  # the centre of pressure rows' order
+            raise ProblemError("key 'robot.foot': standing, the points must lie heel, ball, pad, toe from back to "
+                               f"front along x; they are at {', '.join(f'{k} {v:.4f}' for k, v in x.items())} m")
         return geom
 
 
