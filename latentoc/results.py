@@ -83,7 +83,7 @@ TRAJECTORY_KEYS: dict[str, str] = {
     "settle": "end of the landing's settling, s",
     "tau_min": "lower torque limits, N m (as tau's columns; where enforced)",
     "tau_max": "upper torque limits, N m (as tau's columns; where enforced)",
-    # the enforced limits of a fixed-base kind (latent-min-torque): what the plots draw
+    # the enforced joint limits (latent-min-torque; a broad jump with limits = "urdf"): what the plots draw
     "q_min": "lower joint limits, rad (nq; -inf: none)",
     "q_max": "upper joint limits, rad (nq; inf: none)",
     "v_max": "velocity limits |v| <= v_max, rad/s (nv; inf: none)",

@@ -2,6 +2,7 @@
 humanoid and the Unitree G1 built from their declarations, the G1's contact rows against numeric
 Pinocchio, and bad declarations refused with the key named."""
 import tomllib
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -121,3 +122,102 @@ def test_bad_robot_declarations_are_refused_with_the_key_named():
     cmu, _ = robot_model(CMU_HUMANOID)
     with pytest.raises(ProblemError, match=r"robot\.limits.*effort"):  # the CMU skeleton has none of its own
         urdf_torque_limits(cmu)
+
+
+def _g1_problem():
+    from latentoc.problem_files import load_problem
+
+    return load_problem("problems/g1-broad-jump.toml")
+
+
+def test_g1_training_from_its_retargeted_demonstration():
+    """problems/g1-broad-jump.toml's motion as the symmetric training: ground and toe tip at 0 standing,
+    the sole's four points on the ground within 1 mm, the right foot the left's mirror image, and
+    the phases where numeric forward kinematics puts the toe tip (down until takeoff, then up; back
+    at touchdown)."""
+    from pathlib import Path
+
+    from latentoc.jump.phases import toe_heights, training_phases
+    from latentoc.jump.training import motion_training
+
+    p = _g1_problem()
+    decl = declaration(p.settings)
+    model, smap = robot_model(decl)
+    tr = motion_training(Path("problems") / decl.motion, model, smap, decl)
+    assert tr.Y.shape == (157, 16) and abs(tr.duration - 1.3) < 1e-9
+    geom = decl.geometry(model, tr.Q[0])
+    d = model.createData()
+    pin.framesForwardKinematics(model, d, tr.Q[0])
+    left = foot_points(model, d, geom)
+    right = np.column_stack([d.oMf[model.getFrameId(c.frame)].act(c.offset) for c in geom.right_points])
+    np.testing.assert_allclose(right, left * np.array([[1.0], [-1.0], [1.0]]), atol=1e-9)
+    assert np.abs(left[2]).max() < 1e-3 and abs(left[2].min()) < 1e-12 and abs(left[0, 2]) < 1e-12
+    ph = training_phases(model, tr, geom)
+    z = toe_heights(model, tr.Q, geom)
+    i_to, i_td = (int(np.argmin(np.abs(tr.t - x))) for x in (ph.takeoff, ph.touchdown))
+    assert z[:i_to + 1].max() < 0.005 and np.all(np.diff(z[i_to:i_to + 12]) > 0)
+    assert z[i_td] <= z[0] + 1e-9 < z[i_td - 1]
+    assert 0 < ph.heel_off <= ph.ball_off <= ph.takeoff < ph.touchdown <= ph.ball_strike <= ph.heel_strike
+
+
+def test_bad_g1_problem_inputs_are_refused_by_name(tmp_path):
+    from latentoc.jump.problem import setup
+    from latentoc.motions.readers import MotionFileError
+
+    decl = declaration(_g1_problem().settings)
+    with pytest.raises(ProblemError, match=r"robot\.motion"):  # a robot other than the CMU humanoid needs one
+        setup(robot=dataclasses_replace(decl, motion=""))
+    np.savez(tmp_path / "short.npz", t=np.arange(20) / 120.0, q=np.zeros((20, 30)))
+    with pytest.raises(MotionFileError, match=r"short\.npz.*36 columns"):
+        setup(robot=dataclasses_replace(decl, motion="short.npz"), base_dir=tmp_path)
+    with pytest.raises(ProblemError, match=r"training_jumps"):
+        setup("all", robot=decl, base_dir=Path("problems"))
+
+
+def dataclasses_replace(decl, **kw):
+    import dataclasses
+
+    return dataclasses.replace(decl, **kw)
+
+
+def test_g1_joint_bounds_hold_every_urdf_limit_of_both_legs_and_arms():
+    """The learned coordinates' bounds (a right joint's limits mirrored onto its left partner) against
+    the URDF's XML: the full configurations at the lower and the upper bounds are inside every joint's
+    <limit lower upper>, each bound is some joint's limit (tight), and the velocity bound is the
+    smaller of the two partners' <limit velocity>."""
+    from xml.etree import ElementTree
+
+    from latentoc.robots.catalog import robot_urdf
+
+    decl = _declared(G1_ROBOT)
+    model, smap = robot_model(decl)
+    robot = JumpRobot(SymbolicModel(model), smap, decl.geometry(model, _standing(model, decl)),
+                      urdf_torque_limits(model), 0.4, 35.0, joint_limits=True)
+    xml = {j.get("name"): j.find("limit") for j in ElementTree.parse(robot_urdf("g1")).iter("joint")
+           if j.find("limit") is not None}
+    lo, hi, vmax = robot.joint_bounds
+    base = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
+    for y in (lo, hi):
+        q = smap.to_full(y[None], base[None])[0]
+        for j in range(2, model.njoints):
+            lim = xml[model.names[j]]
+            assert float(lim.get("lower")) - 1e-12 <= q[model.joints[j].idx_q] <= float(lim.get("upper")) + 1e-12
+    for k, name in enumerate(smap.learned_names):
+        partner = name.replace("left", "right")
+        limits = {float(xml[n].get(b)) * s for n in {name, partner} for b in ("lower", "upper") for s in (1, -1)}
+        assert min(abs(lo[k] - v) for v in limits) < 1e-12 and min(abs(hi[k] - v) for v in limits) < 1e-12
+        assert vmax[k] == min(float(xml[n].get("velocity")) for n in {name, partner})
+    assert robot.has_joint_limits and not dataclasses_replace(robot, joint_limits=False).has_joint_limits
+
+
+def test_joint_limit_excess_is_the_worst_overshoot_of_the_recorded_limits():
+    from latentoc.jump.verify import joint_limit_excess
+
+    q = np.array([[0, 0, 0, 0, 0, 0, 1, 0.5, -0.2], [0, 0, 0, 0, 0, 0, 1, 1.3, -0.1]])
+    v = np.array([[0, 0, 0, 0, 0, 0, 2.0, 0.0], [0, 0, 0, 0, 0, 0, -3.5, 1.0]])
+    inf = np.inf
+    arrays = {"q": q, "v": v, "q_min": np.array([-inf] * 7 + [-1.0, -0.15]), "q_max": np.array([inf] * 7 + [1.0, 1.0]),
+              "v_max": np.array([inf] * 6 + [3.0, inf])}
+    pos, vel = joint_limit_excess(arrays)
+    assert pos == pytest.approx(0.3) and vel == pytest.approx(0.5)
+    assert joint_limit_excess({"q": q, "v": v}) == (0.0, 0.0)  # no limits recorded: none held

@@ -67,6 +67,7 @@ class FootGeometry:
     points: tuple[ContactPoint, ...]
     right: dict[str, str]  # left frame -> its mirror partner
     footprint: np.ndarray | None = None  # world heel, ball, toe, pad standing (3 x 4)
+    right_points: tuple[ContactPoint, ...] = ()  # the mirror images of ``points`` in their right frames
 
     def offset(self, name: str) -> np.ndarray:
         """The point ``name``'s offset in its frame (zeros at the frame's origin)."""

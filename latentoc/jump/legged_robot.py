@@ -8,7 +8,9 @@ from. The CMU humanoid is one such declaration (:data:`CMU_HUMANOID`, the defaul
     [robot]
     model = "cmu-humanoid"       # the symmetrised CMU skeleton, or a name from `list --robots`
     mirror = ["l", "r"]          # a right frame's name: the left's with the first "l" made "r"
-    limits = "training"          # Eq. 34 from the training's inverse dynamics, or "urdf"
+    limits = "training"          # Eq. 34 torques from the training's inverse dynamics, or "urdf": the
+                                 # model's effort, position and velocity limits
+    motion = ""                  # the robot's demonstration (NPZ/CSV of t, q); "": take 01_01
     [robot.foot]                 # each point fixed in a frame of the left foot
     heel = { frame = "lfoot", ground = true }            # the frame's origin dropped to the ground
     ball = { frame = "lfoot_end" }                       # the frame's origin
@@ -58,6 +60,7 @@ class RobotDeclaration:
     mirror: tuple[str, str]
     limits: str
     foot: tuple[PointDeclaration, ...]  # in POINTS' order
+    motion: str = ""  # the robot's demonstration, relative to the problem file ("": the CMU's take 01_01)
 
     def right_frame(self, frame: str) -> str:
         """The mirror partner's name of a left frame."""
@@ -94,11 +97,21 @@ class RobotDeclaration:
                 points.append(ContactPoint(k, p.frame, None if not any(p.offset) else np.asarray(p.offset, float)))
         geom = FootGeometry(tuple(points), {p.frame: self.right_frame(p.frame) for p in self.foot})
         geom.footprint = foot_points(model, d, geom)
+        geom.right_points = tuple(_mirrored(model, d, c, geom.right[c.frame], geom.footprint[:, k])
+                                  for k, c in enumerate(geom.points))
         x = dict(zip(POINTS, geom.footprint[0]))
         if not x["heel"] < x["ball"] < x["pad"] < x["toe"]:  # the centre of pressure rows' order
             raise ProblemError("key 'robot.foot': standing, the points must lie heel, ball, pad, toe from back to "
                                f"front along x; they are at {', '.join(f'{k} {v:.4f}' for k, v in x.items())} m")
         return geom
+
+
+def _mirrored(model: pin.Model, d: pin.Data, c: ContactPoint, right: str, at: np.ndarray) -> ContactPoint:
+    """The point of frame ``right`` at the mirror image of the left point ``at`` (frames placed)."""
+    if c.offset is None:
+        return ContactPoint(c.name, right, None)
+    M = d.oMf[model.getFrameId(right)]
+    return ContactPoint(c.name, right, M.rotation.T @ (at * np.array([1.0, -1.0, 1.0]) - M.translation))
 
 
 #: the CMU humanoid (the defaults of ``[robot]``)
@@ -147,6 +160,12 @@ def _mirror(value: Any) -> list[str]:
     return [value[0], value[1]]
 
 
+def _motion(value: Any) -> str:
+    if not isinstance(value, str):
+        raise ValueError
+    return value
+
+
 def _model_name(value: Any) -> str:
     if not isinstance(value, str) or value not in robot_names() or value == "human-arm":
         raise ValueError
@@ -160,7 +179,10 @@ ROBOT_KEYS: dict[str, tuple[Check, Any, str]] = {
     "mirror": (Check(_mirror, '["left", "right"]: two different strings'), list(CMU_HUMANOID.mirror),
                "a right frame's name is its left partner's with the first string made the second"),
     "limits": (choice(*LIMIT_SOURCES), CMU_HUMANOID.limits,
-               '"training" (Eq. 34 from the training inverse dynamics) or "urdf" (its effort limits)'),
+               '"training" (Eq. 34 torque limits from the training inverse dynamics) or "urdf" (the model\'s effort, '
+               'position and velocity limits, all hard)'),
+    "motion": (Check(_motion, "a path (relative to the problem file) of an NPZ or CSV of t and q, or \"\""), "",
+               "the robot's demonstration of the jump (`retarget` writes one); \"\": the CMU humanoid's take 01_01"),
     "foot": (Check(_foot, 'a table of the points heel, ball, toe and pad, each { frame = "name", offset = [x, y, z] }'
                           ' or { frame = "name", ground = true, shift = [dx, dy] }'),
              {k: _point(_as_table(p)) for k, p in zip(POINTS, CMU_HUMANOID.foot)},
@@ -175,7 +197,7 @@ def declaration(values: Mapping[str, Any]) -> RobotDeclaration:
                                     foot[k].get("ground", False), tuple(foot[k].get("shift", (0.0, 0.0))))
                    for k in POINTS)
     return RobotDeclaration(values["robot_model"], tuple(values["robot_mirror"]),  # type: ignore[arg-type]
-                            values["robot_limits"], points)  # type: ignore[arg-type]
+                            values["robot_limits"], points, values["robot_motion"])  # type: ignore[arg-type]
 
 
 def robot_model(decl: RobotDeclaration) -> tuple[pin.Model, SymmetryMap]:

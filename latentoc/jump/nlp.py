@@ -33,7 +33,7 @@ from ..spline import BSpline
 from .contact import EDGES, POINTS
 from .phases import Phases
 from .robot import JumpRobot
-from .rows import families
+from .rows import families, limits
 from .rows.flight import pitch_grid
 from .selection import Selection
 from .settings import JumpSettings
@@ -211,6 +211,7 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: 
     ubg[pad] = np.where(loaded, s.contact_tolerance, np.inf)
     side = names == "point_y"
     lbg[side], ubg[side] = -s.contact_tolerance, s.contact_tolerance
+    limits.bounds(robot, names, comps, lbg, ubg)
     return lbg, ubg
 
 

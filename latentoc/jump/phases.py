@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..mocap.jumps import detect_jumps
-from .contact import FootGeometry, foot_points
+from .contact import POINTS, FootGeometry, foot_points
 from .training import JumpTraining
 
 CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
@@ -130,11 +130,14 @@ def contact_schedule(model: pin.Model, tr: JumpTraining, geom: FootGeometry, tak
     return out
 
 
-def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, fps: float = 120.0,
-                    schedule: bool = True) -> Phases:
+def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, schedule: bool = True) -> Phases:
     """Phases of a symmetric training jump: toe-off, toe touchdown, settle and, with ``schedule``,
     the heel and ball contact schedule (see module doc)."""
-    jumps = detect_jumps(model, tr.Q, fps)
+    fps = round(1.0 / float(np.median(np.diff(tr.t))), 6)  # frames per second (the CMU's 120)
+    low = [POINTS.index("toe"), POINTS.index("ball")]  # each foot's low points, toe tip first
+    feet = tuple(tuple((c.frame, c.offset) for c in (side[k] for k in low)) for side in (geom.points, geom.right_points))
+    jumps = detect_jumps(model, tr.Q, fps, feet=feet, ankles=((geom.points[low[1]].frame, None),
+                                                              (geom.right_points[low[1]].frame, None)))
     if not jumps:
         raise ValueError("no jump detected in the training motion")
     j = jumps[0]

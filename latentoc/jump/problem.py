@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from pathlib import Path
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
@@ -24,6 +25,7 @@ from ..gpdm import GPDM, GPDMSettings, cached_gpdm
 from ..latent.gp_layer import GPLayer, IdentityLayer, Layer
 from ..nlp.blocks import RobotBlock, compile_blocks
 from ..kind import Solution, joint_range
+from ..motions.problem_inputs import problem_dir
 from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
 from ..spline import BSpline
@@ -39,7 +41,7 @@ from .settings import FIELD_DOCS, JumpSettings
 from .solve import JumpSolution, solve_jump
 from .torque_limits import TorqueLimits, TrainingDynamics, estimate_training_dynamics, urdf_torque_limits
 from .legged_robot import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
-from .training import JumpTraining, antisymmetric_centre, training_jumps
+from .training import JumpTraining, antisymmetric_centre, motion_training, training_jumps
 
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
            "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
@@ -62,10 +64,12 @@ class JumpSetup:
     distance_training: float
     sym: SymbolicModel
     planted: PlantedTraining | None = None  # what planting the feet changed in the captured jump
+    joint_limits: bool = False  # the model's joint position and velocity limits held (``limits = "urdf"``)
     _blocks: dict = field(default_factory=dict, repr=False)
 
     def robot(self, mu: float) -> JumpRobot:
-        return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)))
+        return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)),
+                         joint_limits=self.joint_limits)
 
     def blocks(self, robot: JumpRobot, layer: Layer | None = None) -> dict[str, RobotBlock]:
         """The row families' blocks for ``layer`` (default: the GP layer's latent dimension),
@@ -92,16 +96,22 @@ def _toe_x(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
 def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, torque_margin: float = 0.1,
           gpdm_settings: GPDMSettings | None = None, path_smoothing: float = PATH_SMOOTHING,
           torque_floor: float = 5.0, stride: int = 1, plant: bool = False,
-          robot: RobotDeclaration = CMU_HUMANOID) -> JumpSetup:
+          robot: RobotDeclaration = CMU_HUMANOID, base_dir: Path = Path(".")) -> JumpSetup:
     """Model, GPDM, phases, feet, torque limits and training start. ``stride``: the GPDM learns
     every ``stride``-th captured frame (120 Hz) of each jump; ``plant``: the jumps' feet planted
     first (:mod:`.cleaning`; of "all", the jumps whose contact schedule is whole); ``robot``: the
-    problem's ``[robot]`` (:mod:`.legged_robot`)."""
-    if robot.model != CMU_HUMANOID.model:
-        raise ProblemError(f"key 'robot.model': {robot.model!r} has no training jump yet; the contact kind "
-                           "learns from the CMU humanoid's take 01_01 (docs/legged-robots.md)")
+    problem's ``[robot]`` (:mod:`.legged_robot`), its motion relative to ``base_dir``."""
     model, smap = robot_model(robot)
-    trs = training_jumps(training, robot)
+    if robot.motion:
+        if training == "all" or plant:
+            raise ProblemError("[options] training_jumps = \"all\" and plant_training = true choose among and clean the "
+                               "CMU humanoid's jumps of take 01_01; with key 'robot.motion' the motion is the training")
+        trs = [motion_training(base_dir / robot.motion, model, smap, robot)]
+    elif robot.model == CMU_HUMANOID.model:
+        trs = training_jumps(training, robot)
+    else:
+        raise ProblemError(f"key 'robot.motion': {robot.model!r} needs its own demonstration of the jump, an NPZ "
+                           "of t and q such as `python -m latentoc retarget` writes (docs/retargeting.md)")
     planted = None
     if plant:
         geom0 = robot.geometry(model, trs[0].Q[0])
@@ -112,7 +122,8 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
         trs, planted = [c.training for c in cleaned], cleaned[0]
     tr = trs[0]
     if not (isinstance(stride, (int, np.integer)) and not isinstance(stride, bool) and 1 <= stride <= len(tr.t) // 4):
-        raise ValueError(f"training stride must be an integer from 1 to {len(tr.t) // 4} (frames), got {stride!r}")
+        raise ProblemError(f"[options] training_stride: must be an integer from 1 to {len(tr.t) // 4} (frames), "
+                           f"got {stride!r}")
     Ys = [t.Y[::stride] for t in trs]
     gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = robot.geometry(model, tr.Q[0])
@@ -132,7 +143,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
     init = {"P": P, "P_joint": P_joint, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
     return JumpSetup(model, smap, tr, gp, phases, geom, limits, init, float(np.median(bx[td:]) - bx[0]),
-                     SymbolicModel(model), planted)
+                     SymbolicModel(model), planted, joint_limits=robot.limits == "urdf")
 
 
 def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: float, keep: np.ndarray) -> np.ndarray:
@@ -248,16 +259,16 @@ def problem_setup(problem: Problem) -> JumpSetup:
     """The problem's set-up (:func:`setup`), made once per process for its training settings."""
     o = problem.options
     training: str | int = "all" if o["training_jumps"] == "all" else 0
-    robot = declaration(problem.settings)
+    robot, base_dir = declaration(problem.settings), problem_dir(problem)
     key = (training, problem.latent_dim, problem.control_points, o["torque_margin"], o["torque_floor"],
-           o["training_stride"], o["plant_training"], robot)
+           o["training_stride"], o["plant_training"], robot, base_dir)
     if key not in _SETUP_CACHE:
         try:
             _SETUP_CACHE[key] = setup(training, problem.latent_dim, problem.control_points, o["torque_margin"],
                                       torque_floor=o["torque_floor"], stride=o["training_stride"],
-                                      plant=o["plant_training"], robot=robot)
-        except ValueError as exc:
-            raise SolveError(f"problem {problem.name!r}, [options] training_stride: {exc}") from None
+                                      plant=o["plant_training"], robot=robot, base_dir=base_dir)
+        except ProblemError as exc:
+            raise SolveError(f"problem {problem.name!r}, {exc}") from None
     return _SETUP_CACHE[key]
 
 
@@ -298,13 +309,15 @@ def solve_from_starts(solve: Callable[[dict | None], JumpSolution], warm: dict |
 
 def _violations(r: dict[str, Any], checks: dict[str, float], mu: float) -> dict[str, float]:
     """The 1 kHz checks as amounts beyond each limit (0: held): tube, torque (N m), friction ratio,
-    point cones (body weights), centre of pressure, ZMP and COM outside their polygons (m)."""
+    point cones (body weights), centre of pressure, ZMP and COM outside their polygons (m), joint
+    positions (rad) and velocities (rad/s) beyond the model's limits."""
     cop = checks.get("cop_margin_loaded", checks["cop_margin"])
     return {"tube": r["max_tube_violation"], "torque_nm": checks["max_torque_violation"],
             "friction_ratio": max(0.0, checks["max_friction_ratio"] - mu),
             "point_cone_bw": checks["max_point_cone_violation"], "cop_m": max(0.0, -cop),
             "zmp_m": max(0.0, -checks["zmp_margin"]), "com_m": max(0.0, -checks["com_margin"]),
-            "dynamics_bw": checks["max_dynamics_residual"]}
+            "dynamics_bw": checks["max_dynamics_residual"], "joint_limit_rad": checks["max_joint_limit_violation"],
+            "velocity_rad_s": checks["max_velocity_violation"]}
 
 
 def _training_on(js: JumpSetup, t: np.ndarray) -> np.ndarray:

@@ -32,6 +32,7 @@ class JumpRobot:
     limits: TrainingDynamics | TorqueLimits
     mu: float
     mass: float
+    joint_limits: bool = False  # the model's position and velocity limits as rows (:mod:`.rows.limits`)
 
     @property
     def weight(self) -> float:
@@ -84,6 +85,40 @@ class JumpRobot:
             if r in pos:
                 right.append(pos[r])
         return np.setdiff1d(np.arange(len(a)), right)
+
+    @cached_property
+    def joint_bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(lo, hi, v_max) of each learned coordinate: the model's position and velocity limits of its
+        joint and, mirrored, of its right partner's (the tighter); +-inf where the model has none."""
+        m = self.sym.model
+        big = 1e30  # Pinocchio's "no limit" is the largest double
+        lower = np.where(m.lowerPositionLimit > -big, m.lowerPositionLimit, -np.inf)
+        upper = np.where(m.upperPositionLimit < big, m.upperPositionLimit, np.inf)
+        v_of_q = {m.joints[j].idx_q: m.joints[j].idx_v for j in range(1, m.njoints) if m.joints[j].nq == 1}
+        vel = np.array([m.velocityLimit[v] if m.velocityLimit[v] < big else np.inf for v in range(m.nv)])
+        qi = self.smap.learned_q
+        lo, hi = lower[qi].copy(), upper[qi].copy()
+        vmax = np.array([vel[v_of_q[int(q)]] for q in qi])
+        for r_q, y_idx, f in self.smap.copied:
+            r_lo, r_hi = sorted((lower[r_q] / f, upper[r_q] / f))
+            lo[y_idx], hi[y_idx] = max(lo[y_idx], r_lo), min(hi[y_idx], r_hi)
+            vmax[y_idx] = min(vmax[y_idx], vel[v_of_q[int(r_q)]])
+        return lo, hi, vmax
+
+    @property
+    def has_joint_limits(self) -> bool:
+        """Whether the NLP holds joint position and velocity limits (declared, and the model has some)."""
+        lo, hi, vmax = self.joint_bounds
+        return self.joint_limits and bool(np.isfinite(lo).any() or np.isfinite(hi).any() or np.isfinite(vmax).any())
+
+    def limit_arrays(self) -> dict[str, np.ndarray]:
+        """The held joint limits as a result records them (q_min, q_max: nq; v_max: nv; +-inf: none,
+        as for the free-flyer's coordinates)."""
+        m, big = self.sym.model, 1e30
+        lo, hi, v = (np.array(x, float) for x in (m.lowerPositionLimit, m.upperPositionLimit, m.velocityLimit))
+        lo[:7], hi[:7], v[:6] = -np.inf, np.inf, np.inf
+        return {"q_min": np.where(lo > -big, lo, -np.inf), "q_max": np.where(hi < big, hi, np.inf),
+                "v_max": np.where(v < big, v, np.inf)}
 
     # ------------------------------------------------------------- symbolic pieces
     def configuration(self, b, bd, bdd, y, yd, ydd):

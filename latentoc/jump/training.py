@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -24,6 +25,7 @@ from ..robots.human_models import broad_jump_sequences, cmu_skeleton
 from ..mocap.anthropometry import cmu_inertias
 from ..mocap.skeleton_model import build_model
 from ..mocap.symmetry import SymmetryMap, symmetrized_skeleton
+from ..motions.readers import MotionFileError, read_raw_motion
 from .base import base_to_freeflyer, freeflyer_to_base
 from .legged_robot import CMU_HUMANOID, RobotDeclaration
 
@@ -70,6 +72,19 @@ def symmetric_motion(Q: np.ndarray, t: np.ndarray, model: pin.Model, smap: Symme
     base[:, 1] -= min(fp[2, k] for k, p in enumerate(robot.foot) if not p.ground)
     Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
     return JumpTraining(np.asarray(t, float) - t[0], Y, base, Qs)
+
+
+def motion_training(path: Path, model: pin.Model, smap: SymmetryMap, robot: RobotDeclaration) -> JumpTraining:
+    """A robot's own demonstration of the jump (an NPZ or CSV of t and the full q, as `retarget`
+    writes it) as a symmetric training jump."""
+    raw = read_raw_motion(path, model)
+    if raw.names is not None or raw.values.shape[1] != model.nq:
+        raise MotionFileError(f"{path}: a contact problem's motion is the robot's full configuration q "
+                              f"({model.nq} columns, base first, no joint_names); got {raw.values.shape[1]} columns")
+    dt = np.diff(raw.t)
+    if np.ptp(dt) > 1e-6 * dt.mean():
+        raise MotionFileError(f"{path}: the samples are not evenly spaced in time ({dt.min():.6f} to {dt.max():.6f} s)")
+    return symmetric_motion(raw.values, raw.t, model, smap, robot)
 
 
 def training_jumps(which: str | int = 0, robot: RobotDeclaration = CMU_HUMANOID) -> list[JumpTraining]:

@@ -54,6 +54,18 @@ PAD_SETBACK = 0.01  # m: the pad's setback in results that do not record it (the
 LOADED = 0.01  # of body weight: a point pushing harder than this is loaded
 
 
+TOE = POINTS.index("toe")
+MIRROR = np.array([1.0, -1.0, 1.0])  # a left point to its right mirror image
+
+
+def _wrench_jacobian(model: pin.Model, d: pin.Data, frame_id: int, p: np.ndarray) -> np.ndarray:
+    """(6, nv) Jacobian of the point ``p`` fixed to frame ``frame_id``'s body, world axes: a wrench
+    about ``p`` (force, moment) acts on the joints through its transpose (placements and joint
+    Jacobians computed)."""
+    J = pin.getFrameJacobian(model, d, frame_id, pin.LOCAL_WORLD_ALIGNED)
+    return np.vstack([J[:3] - pin.skew(p - d.oMf[frame_id].translation) @ J[3:], J[3:]])
+
+
 def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Per-foot wrench (6, world-aligned at the toe tip) the motion needs: the sagittal base
     rows of ``tau = rnea(q, v, a)`` solved for (fx, fz, my), with ``J_feet`` the sum of both
@@ -100,10 +112,10 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict[str, np.ndar
         else:
             pin.computeJointJacobians(model, d, q)
             pin.framesForwardKinematics(model, d, q)
-        JL = pin.getFrameJacobian(model, d, ids["l"], pin.LOCAL_WORLD_ALIGNED)
-        JR = pin.getFrameJacobian(model, d, ids["r"], pin.LOCAL_WORLD_ALIGNED)
+        toe = foot_points(model, d, geom)[:, TOE]
+        JL, JR = (_wrench_jacobian(model, d, ids[side], p) for side, p in (("l", toe), ("r", MIRROR * toe)))
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
-        out["toe_xz"][i] = d.oMf[ids["l"]].translation[[0, 2]]
+        out["toe_xz"][i] = toe[[0, 2]]
         if contact[i]:
             out["points"][i], out["point_velocity"][i] = _left_points(model, d, geom, v)
         gen: np.ndarray
@@ -178,6 +190,18 @@ def contact_kinematics(t: np.ndarray, points: np.ndarray, velocity: np.ndarray, 
             "ground_work_positive": integral(np.maximum(power, 0.0)), "ground_work": integral(power)}
 
 
+def joint_limit_excess(arrays: dict) -> tuple[float, float]:
+    """How far the motion goes beyond the joint position limits (rad) and velocity limits (rad/s) the
+    result records as held (``q_min``, ``q_max``, ``v_max``; none recorded: 0) at its worst sample."""
+    if "q_min" not in arrays:
+        return 0.0, 0.0
+    q, v = np.asarray(arrays["q"]), np.asarray(arrays["v"])
+    lo, hi, vmax = (np.asarray(arrays[k], float) for k in ("q_min", "q_max", "v_max"))
+    pos = np.maximum(lo - q, q - hi)
+    vel = np.abs(v) - vmax
+    return float(max(0.0, pos.max(initial=0.0))), float(max(0.0, vel.max(initial=0.0)))
+
+
 def _min(x: np.ndarray) -> float:
     return float(np.nanmin(x)) if np.isfinite(x).any() else np.inf
 
@@ -200,6 +224,7 @@ def verify(model: pin.Model, arrays: dict, mu: float = 0.4,
            "max_torque_violation": float(max(0.0, -sr["torque"].min(initial=0.0))),
            "max_point_cone_violation": float(max(0.0, -_min(sr["point_cone"]))) / W if np.isfinite(sr["point_cone"]).any() else 0.0,
            "max_symmetric_torque": float(sr["symmetric_torque"].max(initial=0.0))}
+    out["max_joint_limit_violation"], out["max_velocity_violation"] = joint_limit_excess(arrays)
     Wr = np.asarray(arrays["wrench"])
     node_mis = 0.0
     if "node_wrench" in arrays and "node_t" in arrays:

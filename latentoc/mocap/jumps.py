@@ -1,8 +1,9 @@
 """Phase detection of standing broad jumps in a captured take (Kang & Park 2015, Sect. 4.2).
 
 Nothing is hard-coded about the take: phases come from the heights of the feet
-(the lower of the ``<side>toes_end`` and ``<side>foot_end`` frames of each foot) and
-from the root speed, computed by forward kinematics of the model.
+(the lowest of each foot's low points: the CMU humanoid's ``<side>toes_end`` and
+``<side>foot_end`` frames, or a robot's declared sole points) and from the root speed,
+computed by forward kinematics of the model.
 
 * The local ground level of each foot is a running 10th percentile of its height
   (window 2 s), which follows slow drift of the capture volume.
@@ -43,27 +44,39 @@ class Jump:
         return (self.touchdown - self.takeoff) / self.fps
 
 
-def feature_tracks(model: pin.Model, Q: np.ndarray) -> dict[str, np.ndarray]:
-    """Foot low-point heights, ankle positions and root positions along ``Q``."""
+#: a point fixed in a frame: (frame, offset in it; None: the frame's origin)
+FramePoint = tuple[str, "np.ndarray | None"]
+#: the CMU humanoid's feet: each foot's low points (toes end, foot end) and the ankles (tibia ends)
+CMU_FEET: tuple[tuple[FramePoint, ...], tuple[FramePoint, ...]] = (
+    (("ltoes_end", None), ("lfoot_end", None)), (("rtoes_end", None), ("rfoot_end", None)))
+CMU_ANKLES: tuple[FramePoint, FramePoint] = (("ltibia_end", None), ("rtibia_end", None))
+
+
+def feature_tracks(model: pin.Model, Q: np.ndarray, feet=CMU_FEET, ankles=CMU_ANKLES) -> dict[str, np.ndarray]:
+    """Foot low-point heights (the lowest of each foot's ``feet`` points), ankle positions and root
+    positions along ``Q``."""
     d = model.createData()
-    names = ["ltoes_end", "lfoot_end", "rtoes_end", "rfoot_end", "ltibia_end", "rtibia_end"]
-    ids = [model.getFrameId(n) for n in names]
+    points = [*feet[0], *feet[1], *ankles]
+    ids = [model.getFrameId(f) for f, _ in points]
     P = np.zeros((len(Q), len(ids), 3))
     for i, q in enumerate(Q):
         pin.framesForwardKinematics(model, d, q)
-        for k, f in enumerate(ids):
-            P[i, k] = d.oMf[f].translation
-    return {"left": np.minimum(P[:, 0, 2], P[:, 1, 2]),
-            "right": np.minimum(P[:, 2, 2], P[:, 3, 2]),
-            "ankles": 0.5 * (P[:, 4] + P[:, 5]),
+        for k, (f, (_, offset)) in enumerate(zip(ids, points)):
+            M = d.oMf[f]
+            P[i, k] = M.translation if offset is None else M.translation + M.rotation @ offset
+    n_l, n_r = len(feet[0]), len(feet[1])
+    return {"left": P[:, :n_l, 2].min(axis=1),
+            "right": P[:, n_l:n_l + n_r, 2].min(axis=1),
+            "ankles": 0.5 * (P[:, -2] + P[:, -1]),
             "root": np.array(Q[:, :3])}
 
 
 def detect_jumps(model: pin.Model, Q: np.ndarray, fps: float = 120.0,
                  core_height: float = 0.08, contact_height: float = 0.015,
-                 still_speed: float = 0.25, min_flight: float = 0.08) -> list[Jump]:
-    """All two-footed jumps in the configurations ``Q`` (n, nq) of a free-flyer model."""
-    tr = feature_tracks(model, Q)
+                 still_speed: float = 0.25, min_flight: float = 0.08, feet=CMU_FEET, ankles=CMU_ANKLES) -> list[Jump]:
+    """All two-footed jumps in the configurations ``Q`` (n, nq) of a free-flyer model whose feet's
+    low points and ankles are ``feet`` and ``ankles`` (:func:`feature_tracks`)."""
+    tr = feature_tracks(model, Q, feet, ankles)
     win = int(2 * fps) | 1
     elev = np.minimum(tr["left"] - percentile_filter(tr["left"], 10, size=win, mode="nearest"),
                       tr["right"] - percentile_filter(tr["right"], 10, size=win, mode="nearest"))

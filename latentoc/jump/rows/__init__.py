@@ -4,7 +4,8 @@ a Function of the joint motion (y, yd, ydd) and the node's other inputs r, never
 * :mod:`.contact` - a contact node or sample: base rows = sum J^T f, torques, foot placement, ZMP, COM;
 * :mod:`.flight` - the flight's inverse dynamics (at any time), foot clearance and pitch rate;
 * :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact;
-* :mod:`.tube` - the tube (Eq. 29), from the GP layer alone.
+* :mod:`.tube` - the tube (Eq. 29), from the GP layer alone;
+* :mod:`.limits` - the robot's joint position and velocity limits (none for the CMU humanoid).
 
 Each module names its blocks' inputs r (sizes, in order), builds them for latent dimension d and
 wires its families (:mod:`latentoc.jump.wiring`): their nodes, inputs and rows; :func:`families`
@@ -35,17 +36,19 @@ def inputs(robot: JumpRobot, spec: dict[str, int]) -> tuple[tuple[ca.SX, ca.SX, 
 def row_blocks(robot: JumpRobot, d: int, joint_space: bool = False) -> dict[str, RobotBlock]:
     """Every row family's block for latent dimension d; ``joint_space``: for the joint path itself
     (the identity layer, d = 37), whose tangents are constant (:attr:`RobotBlock.identity`)."""
-    from . import contact, flight, transitions
+    from . import contact, flight, limits, transitions
 
     blocks = {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
               "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
               "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
+    if robot.has_joint_limits:
+        blocks["joint_limits"] = limits.block(robot, d)
     return {k: replace(b, identity=True) for k, b in blocks.items()} if joint_space else blocks
 
 
 def families() -> tuple:
     """The wiring functions of the NLP's families, in the order of its rows."""
-    from . import contact, flight, transitions, tube
+    from . import contact, flight, limits, transitions, tube
 
     return (contact.wire_nodes, contact.wire_samples, transitions.wire_takeoff, flight.wire_pitch,
-            flight.wire_samples, flight.wire_clearance, transitions.wire_touchdown, tube.wire)
+            flight.wire_samples, flight.wire_clearance, transitions.wire_touchdown, tube.wire, limits.wire)
