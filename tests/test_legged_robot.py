@@ -221,3 +221,65 @@ def test_joint_limit_excess_is_the_worst_overshoot_of_the_recorded_limits():
     pos, vel = joint_limit_excess(arrays)
     assert pos == pytest.approx(0.3) and vel == pytest.approx(0.5)
     assert joint_limit_excess({"q": q, "v": v}) == (0.0, 0.0)  # no limits recorded: none held
+
+
+def _g1_smap():
+    return robot_model(declaration(_g1_problem().settings))[1]
+
+
+def _g1_training():
+    from latentoc.jump.training import motion_training
+
+    decl = declaration(_g1_problem().settings)
+    model, smap = robot_model(decl)
+    tr = motion_training(Path("problems") / decl.motion, model, smap, decl)
+    return model, tr, decl.geometry(model, tr.Q[0])
+
+
+def test_a_declared_schedule_replaces_the_detected_times_and_settles_after_its_touchdown():
+    from latentoc.jump.phases import training_phases
+
+    model, tr, geom = _g1_training()
+    detected = training_phases(model, tr, geom)
+    ph = training_phases(model, tr, geom, declared={"heel_off": 0.2, "takeoff": 0.29, "touchdown": 0.75})
+    assert (ph.heel_off, ph.takeoff, ph.touchdown) == (0.2, 0.29, 0.75)
+    assert ph.heel_off < ph.ball_off <= ph.takeoff and ph.heel_strike == detected.heel_strike  # the rest re-detected
+    assert ph.settle >= ph.touchdown and ph.duration == detected.duration
+
+
+@pytest.mark.parametrize("declared, key", [({"takeoff": 0.8}, "takeoff"), ({"heel_off": 0.3, "ball_off": 0.25}, "ball_off"),
+                                           ({"touchdown": 0.2}, "touchdown"), ({"heel_strike": 1.5}, "heel_strike")])
+def test_a_schedule_out_of_order_is_refused_naming_its_key(declared, key):
+    from latentoc.jump.phases import training_phases
+
+    model, tr, geom = _g1_training()
+    with pytest.raises(ProblemError, match=rf"schedule\.{key}"):
+        training_phases(model, tr, geom, declared=declared)
+
+
+def test_planting_a_rigid_sole_holds_it_flat_then_pivots_it_on_its_toe_tip():
+    """The G1's symmetric demonstration slides its feet 24 mm sideways (the base's sway projected
+    away); planted (latentoc.jump.cleaning, a rigid sole: no hinge) every sole point stays at its
+    standing place while the heel is loaded and the toe tip alone while the foot pivots, by numeric
+    forward kinematics; only the left leg's joints and the sagittal base change."""
+    from latentoc.jump.cleaning import foot_bodies, planted_training
+    from latentoc.jump.phases import training_phases
+
+    model, tr, geom = _g1_training()
+    assert foot_bodies(model, geom) == ("left_ankle_roll_link", None)
+    ph = training_phases(model, tr, geom, declared={"heel_off": 0.2, "ball_off": 0.2, "takeoff": 0.275})
+    assert ph.pad_with_ball and not ph.loaded("pad", np.array([0.25]))[0] and ph.loaded("toe", np.array([0.25]))[0]
+    pt = planted_training(model, _g1_smap(), tr, ph, geom)
+    d = model.createData()
+    P = []
+    for q in pt.training.Q:
+        pin.framesForwardKinematics(model, d, q)
+        P.append(foot_points(model, d, geom))
+    P = np.array(P)
+    flat, pivot = tr.t <= 0.2 + 1e-9, (tr.t > 0.2 + 1e-9) & (tr.t <= 0.275 + 1e-9)
+    assert np.abs(P[flat] - P[0]).max() < 1e-6
+    assert np.abs(P[pivot, :, 2] - P[0, :, 2]).max() < 1e-6 and np.abs(P[pivot, 2, 0] - P[0, 2, 0]).max() > 0.01
+    changed = np.flatnonzero(np.abs(pt.training.Y - tr.Y).max(axis=0) > 1e-9)
+    smap = _g1_smap()
+    assert {smap.learned_names[k] for k in changed} <= {n for n in smap.learned_names if n.startswith("left_") and
+                                                        any(j in n for j in ("hip", "knee", "ankle"))}

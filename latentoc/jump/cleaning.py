@@ -23,14 +23,12 @@ import pinocchio as pin
 from ..mocap.symmetry import SymmetryMap
 from ..motions.planting import Plant, plant, taper
 from .base import base_to_freeflyer, freeflyer_to_base
-from .contact import FootGeometry
+from .contact import POINTS, FootGeometry
 from .phases import Phases
 from .training import JumpTraining
 
-__all__ = ["ANCHOR", "HINGE", "PlantedTraining", "leg_joints", "planted_training", "plantable"]
+__all__ = ["PlantedTraining", "foot_bodies", "leg_joints", "planted_training", "plantable"]
 
-ANCHOR = "ltoes"  # the body held flat on the ground in contact
-HINGE = "ltoes_rx"  # the toe joint: the hinge between the flat foot and the flat toes
 TAPER = 0.05  # s over which the correction fades into the flight
 TOE_RAMP = 0.05  # s over which the toe joint is brought to its standing angle before the heel loads
 SAGITTAL_BASE_V = (0, 2, 4)  # the base's x, z and pitch velocity coordinates
@@ -48,11 +46,17 @@ class PlantedTraining:
     base_change: np.ndarray  # largest |change| of the base's x, z (m) and pitch (rad)
 
 
-def leg_joints(model: pin.Model, anchor: str = ANCHOR) -> tuple[str, ...]:
+def leg_joints(model: pin.Model, anchor: str) -> tuple[str, ...]:
     """The 1-DOF joints between the base and the body frame ``anchor`` (the leg that carries it),
     base to foot: for the CMU humanoid's toes the hip's three, the knee, the ankle's two and the toe."""
     j = model.frames[model.getFrameId(anchor)].parentJoint
     return tuple(model.names[k] for k in model.supports[j] if k > 0 and model.joints[k].nq == 1)
+
+
+def anchor_point(model: pin.Model, anchor_id: int, frame: str, offset: np.ndarray) -> np.ndarray:
+    """The point ``offset`` of frame ``frame`` in the coordinates of the frame ``anchor_id`` on the same body."""
+    a, f = model.frames[anchor_id].placement, model.frames[model.getFrameId(frame)].placement
+    return a.actInv(f.act(offset))
 
 
 def _ramped(theta: np.ndarray, target: float, held: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -71,14 +75,26 @@ def plantable(phases: Phases) -> bool:
     return 0.0 < ph.heel_off <= ph.ball_off <= ph.takeoff < ph.touchdown <= ph.ball_strike <= ph.heel_strike < ph.duration
 
 
+def foot_bodies(model: pin.Model, geom: FootGeometry) -> tuple[str, str | None]:
+    """The body the planting holds (the toe tip's: the CMU's toes, a rigid sole's foot) and the hinge
+    between it and the heel's body (the CMU's toe joint; None for a rigid sole)."""
+    def joint(point: str) -> int:
+        return int(model.frames[model.getFrameId(geom.points[POINTS.index(point)].frame)].parentJoint)
+
+    jt = joint("toe")
+    anchor = next(f.name for f in model.frames if f.parentJoint == jt and f.type == pin.FrameType.BODY)
+    return anchor, (model.names[jt] if joint("heel") != jt else None)
+
+
 def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phases: Phases,
                      geom: FootGeometry) -> PlantedTraining:
     """The training jump ``tr`` with its feet planted (module doc); ``geom``: the feet's points."""
     t, Q = tr.t, tr.Q
     stance = t <= phases.takeoff + 1e-9
     landing = t >= phases.touchdown - 1e-9
+    anchor, hinge = foot_bodies(model, geom)
     d = model.createData()
-    fid = model.getFrameId(ANCHOR)
+    fid = model.getFrameId(anchor)
     pin.framesForwardKinematics(model, d, Q[0])
     standing = d.oMf[fid].copy()
     landed = np.zeros((int(landing.sum()), 3))
@@ -88,19 +104,27 @@ def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phas
     point = np.median(landed[:, :2], axis=0)
     # over the captured landing point, at the standing width and heading (the NLP's feet keep them)
     on_ground = pin.SE3(standing.rotation, np.array([point[0], standing.translation[1], standing.translation[2]]))
-    jid = model.getJointId(HINGE)
-    iq = model.joints[jid].idx_q
-    flat = phases.flat(t) & (stance | landing)
-    contact = stance | landing
-    theta = _ramped(Q[:, iq], float(Q[0, iq]), flat, t)
-    held = contact & (np.abs(t[:, None] - t[flat][None, :]).min(axis=1) < TOE_RAMP)
-    leg = leg_joints(model)
+    leg = leg_joints(model, anchor)
     legs_v = [model.joints[model.getJointId(n)].idx_v for n in leg]
     free_v = np.array(list(SAGITTAL_BASE_V) + legs_v)
     weights = np.concatenate([BASE_WEIGHTS, np.ones(len(legs_v))])
-    iv = model.joints[jid].idx_v
-    plants = [Plant(ANCHOR, standing, stance), Plant(ANCHOR, on_ground, landing)]
-    Qp = plant(model, Q, free_v, plants, {iv: (theta, held)}, weights)
+    flat = phases.flat(t) & (stance | landing)
+    contact = stance | landing
+    if hinge is None:  # a rigid sole: flat while the heel is loaded, then pivoting on its toe tip
+        toe = geom.points[POINTS.index("toe")]
+        tip = np.zeros(3) if toe.offset is None else np.asarray(toe.offset, float)
+        on_tip = anchor_point(model, fid, toe.frame, tip)
+        plants = [Plant(anchor, standing, stance & flat), Plant(anchor, on_ground, landing & flat),
+                  Plant(anchor, pin.SE3(np.eye(3), standing.act(on_tip)), stance & ~flat, point=on_tip),
+                  Plant(anchor, pin.SE3(np.eye(3), on_ground.act(on_tip)), landing & ~flat, point=on_tip)]
+        Qp = plant(model, Q, free_v, plants, None, weights)
+    else:
+        jid = model.getJointId(hinge)
+        iq, iv = model.joints[jid].idx_q, model.joints[jid].idx_v
+        theta = _ramped(Q[:, iq], float(Q[0, iq]), flat, t)
+        held = contact & (np.abs(t[:, None] - t[flat][None, :]).min(axis=1) < TOE_RAMP)
+        plants = [Plant(anchor, standing, stance), Plant(anchor, on_ground, landing)]
+        Qp = plant(model, Q, free_v, plants, {iv: (theta, held)}, weights)
     Y0, legs = tr.Y, [smap.learned_names.index(n) for n in leg]
     dY = np.zeros_like(Y0)
     dY[:, legs] = smap.to_learned(Qp)[:, legs] - Y0[:, legs]

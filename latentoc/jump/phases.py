@@ -22,11 +22,13 @@ Nodes: ``n_stance`` on [0, t_to], ``n_flight`` on [t_to, t_td], ``n_land`` on [t
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
+from ..errors import ProblemError
 from ..mocap.jumps import detect_jumps
 from .contact import POINTS, FootGeometry, foot_points
 from .training import JumpTraining
@@ -46,6 +48,7 @@ class Phases:
     ball_off: float | None = None
     ball_strike: float | None = None
     heel_strike: float | None = None
+    pad_with_ball: bool = False  # the pad on the ball's body (a rigid sole): loaded with the ball, not alone
 
     def flat(self, t: np.ndarray) -> np.ndarray:
         """Whether the foot lies flat (the heel loaded) at contact times ``t``."""
@@ -64,9 +67,11 @@ class Phases:
             ((t >= self.touchdown - 1e-9) & (t < self.ball_strike - 1e-9))
 
     def loaded(self, point: str, t: np.ndarray) -> np.ndarray:
-        """Whether ``point`` ("heel", "ball", "toe" or "pad": the toes') may carry force at contact
-        times ``t``."""
+        """Whether ``point`` ("heel", "ball", "toe" or "pad": the toes', or a rigid sole's with the
+        ball) may carry force at contact times ``t``."""
         t = np.asarray(t, float)
+        if point == "pad" and self.pad_with_ball:  # a rigid sole pivots on its toe tip alone
+            point = "ball"
         if point in ("toe", "pad") or self.heel_off is None:
             return np.ones(t.shape, bool)
         off, strike = {"heel": (self.heel_off, self.heel_strike), "ball": (self.ball_off, self.ball_strike)}[point]
@@ -130,22 +135,33 @@ def contact_schedule(model: pin.Model, tr: JumpTraining, geom: FootGeometry, tak
     return out
 
 
-def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, schedule: bool = True) -> Phases:
+#: the contact schedule's times in the order they must come (a problem's ``[schedule]`` keys)
+SCHEDULE_ORDER = ("heel_off", "ball_off", "takeoff", "touchdown", "ball_strike", "heel_strike")
+
+
+def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, schedule: bool = True,
+                    declared: Mapping[str, float] | None = None) -> Phases:
     """Phases of a symmetric training jump: toe-off, toe touchdown, settle and, with ``schedule``,
-    the heel and ball contact schedule (see module doc)."""
+    the heel and ball contact schedule (see module doc); the times in ``declared`` (a problem's
+    ``[schedule]``) replace the detected ones, checked in :data:`SCHEDULE_ORDER`."""
+    declared = dict(declared or {})
     fps = round(1.0 / float(np.median(np.diff(tr.t))), 6)  # frames per second (the CMU's 120)
     low = [POINTS.index("toe"), POINTS.index("ball")]  # each foot's low points, toe tip first
     feet = tuple(tuple((c.frame, c.offset) for c in (side[k] for k in low)) for side in (geom.points, geom.right_points))
     jumps = detect_jumps(model, tr.Q, fps, feet=feet, ankles=((geom.points[low[1]].frame, None),
                                                               (geom.right_points[low[1]].frame, None)))
     if not jumps:
-        raise ValueError("no jump detected in the training motion")
+        raise ProblemError("the training motion has no jump: its feet never leave the ground together "
+                           "(8 cm up for 80 ms); key 'robot.motion'")
     j = jumps[0]
     z = toe_heights(model, tr.Q, geom)
     lo = max(0, j.takeoff - int(round(0.1 * fps)))
     i_off = lo + int(np.argmin(z[lo:j.takeoff + 1]))
     down = np.where(z[j.touchdown:] <= z[0])[0]
     i_td = j.touchdown + int(down[0]) if len(down) else j.touchdown
+    takeoff = float(declared.get("takeoff", tr.t[i_off]))
+    touchdown = float(declared.get("touchdown", tr.t[i_td]))
+    i_td = int(np.searchsorted(tr.t, touchdown - 1e-9))
     d = model.createData()
     settle = None
     for i in range(i_td, len(tr.Q)):
@@ -157,6 +173,27 @@ def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, sche
             break
     if settle is None:
         settle = tr.t[-1]
-    takeoff, touchdown = float(tr.t[i_off]), float(tr.t[i_td])
     sched = contact_schedule(model, tr, geom, takeoff, touchdown) if schedule else {}
-    return Phases(takeoff, touchdown, float(settle), tr.duration, **sched)
+    sched.update({k: float(v) for k, v in declared.items() if k in sched})
+    rigid = _body(model, geom, "pad") == _body(model, geom, "ball")
+    ph = Phases(takeoff, touchdown, float(max(settle, touchdown)), tr.duration, **sched, pad_with_ball=rigid)
+    _check_order(ph, declared)
+    return ph
+
+
+def _body(model: pin.Model, geom: FootGeometry, point: str) -> int:
+    """The joint that moves the point ``point`` of the left foot."""
+    return int(model.frames[model.getFrameId(geom.points[POINTS.index(point)].frame)].parentJoint)
+
+
+def _check_order(ph: Phases, declared: Mapping[str, float]) -> None:
+    """A ProblemError naming the first declared time out of :data:`SCHEDULE_ORDER` or outside the motion."""
+    times = [(k, getattr(ph, k)) for k in SCHEDULE_ORDER if getattr(ph, k) is not None]
+    for (a, ta), (b, tb) in zip(times, times[1:]):
+        if ta > tb + 1e-12 or (a, b) == ("takeoff", "touchdown") and ta >= tb:
+            key = b if b in declared else a
+            raise ProblemError(f"key 'schedule.{key}': the contact schedule must run {' <= '.join(SCHEDULE_ORDER)} "
+                               f"(takeoff < touchdown); {a} is {ta:.4f} s and {b} {tb:.4f} s")
+    for k, v in declared.items():
+        if not 0.0 < v < ph.duration:
+            raise ProblemError(f"key 'schedule.{k}': {v} s is outside the training motion (0 to {ph.duration:.4f} s)")

@@ -27,14 +27,14 @@ from ..nlp.blocks import RobotBlock, compile_blocks
 from ..kind import Solution, joint_range
 from ..motions.problem_inputs import problem_dir
 from ..problem import Problem, apply_overrides
-from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number
+from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, tube_delta
 from .base import base_to_freeflyer
-from .cleaning import PlantedTraining, leg_joints, plantable, planted_training
+from .cleaning import PlantedTraining, foot_bodies, leg_joints, plantable, planted_training
 from .contact import POINTS, FootGeometry, foot_points
 from .path import METHODS, joint_range_path, latent_path, leg_residual_path
-from .phases import Phases, training_phases
+from .phases import SCHEDULE_ORDER, Phases, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
 from .settings import FIELD_DOCS, JumpSettings
@@ -96,16 +96,18 @@ def _toe_x(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
 def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, torque_margin: float = 0.1,
           gpdm_settings: GPDMSettings | None = None, path_smoothing: float = PATH_SMOOTHING,
           torque_floor: float = 5.0, stride: int = 1, plant: bool = False,
-          robot: RobotDeclaration = CMU_HUMANOID, base_dir: Path = Path(".")) -> JumpSetup:
+          robot: RobotDeclaration = CMU_HUMANOID, base_dir: Path = Path("."),
+          schedule: dict[str, float] | None = None) -> JumpSetup:
     """Model, GPDM, phases, feet, torque limits and training start. ``stride``: the GPDM learns
     every ``stride``-th captured frame (120 Hz) of each jump; ``plant``: the jumps' feet planted
     first (:mod:`.cleaning`; of "all", the jumps whose contact schedule is whole); ``robot``: the
-    problem's ``[robot]`` (:mod:`.legged_robot`), its motion relative to ``base_dir``."""
+    problem's ``[robot]`` (:mod:`.legged_robot`), its motion relative to ``base_dir``; ``schedule``:
+    contact times that replace the detected ones (:func:`.phases.training_phases`)."""
     model, smap = robot_model(robot)
     if robot.motion:
-        if training == "all" or plant:
-            raise ProblemError("[options] training_jumps = \"all\" and plant_training = true choose among and clean the "
-                               "CMU humanoid's jumps of take 01_01; with key 'robot.motion' the motion is the training")
+        if training == "all":
+            raise ProblemError("[options] training_jumps = \"all\" chooses every jump of the CMU humanoid's take 01_01; "
+                               "with key 'robot.motion' that motion is the training")
         trs = [motion_training(base_dir / robot.motion, model, smap, robot)]
     elif robot.model == CMU_HUMANOID.model:
         trs = training_jumps(training, robot)
@@ -115,9 +117,10 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     planted = None
     if plant:
         geom0 = robot.geometry(model, trs[0].Q[0])
-        schedules = [training_phases(model, c, geom0) for c in trs]
+        schedules = [training_phases(model, c, geom0, declared=schedule) for c in trs]
         if not plantable(schedules[0]):
-            raise ValueError("the training jump's contact schedule is not whole (heel, ball, takeoff, touchdown)")
+            raise ProblemError("[options] plant_training: the training jump's contact schedule is not whole "
+                               "(heel, ball, takeoff, touchdown)")
         cleaned = [planted_training(model, smap, c, ph, geom0) for c, ph in zip(trs, schedules) if plantable(ph)]
         trs, planted = [c.training for c in cleaned], cleaned[0]
     tr = trs[0]
@@ -127,7 +130,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     Ys = [t.Y[::stride] for t in trs]
     gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = robot.geometry(model, tr.Q[0])
-    phases = training_phases(model, tr, geom)
+    phases = training_phases(model, tr, geom, declared=schedule)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
     loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits: TrainingDynamics | TorqueLimits = estimate_training_dynamics(
@@ -227,6 +230,8 @@ SCHEMA = Schema("broad-jump", (
     Setting("baseline.joint_range_deg", "joint_range_deg", number(0, lo_open=True), 30.0,
             "full-space baseline (method joint-range): +-deg around the training joints' fit"),
     *[Setting(f"robot.{k}", f"robot_{k}", c, d, doc) for k, (c, d, doc) in ROBOT_KEYS.items()],
+    *[Setting(f"schedule.{k}", f"schedule_{k}", optional(number(0, lo_open=True)), None,
+              f"s: the {k.replace('_', ' ')} time (none: detected from the training motion)") for k in SCHEDULE_ORDER],
     Table("options", "options", tuple(
         [Setting(k, k, c, d, doc) for k, (c, d, doc) in SETUP_OPTIONS.items()]
         + [Setting(_TOML_NAMES.get(f.name, f.name), _TOML_NAMES.get(f.name, f.name),
@@ -260,13 +265,16 @@ def problem_setup(problem: Problem) -> JumpSetup:
     o = problem.options
     training: str | int = "all" if o["training_jumps"] == "all" else 0
     robot, base_dir = declaration(problem.settings), problem_dir(problem)
+    schedule = {k: problem.settings[f"schedule_{k}"] for k in SCHEDULE_ORDER
+                if problem.settings[f"schedule_{k}"] is not None}
     key = (training, problem.latent_dim, problem.control_points, o["torque_margin"], o["torque_floor"],
-           o["training_stride"], o["plant_training"], robot, base_dir)
+           o["training_stride"], o["plant_training"], robot, base_dir, tuple(sorted(schedule.items())))
     if key not in _SETUP_CACHE:
         try:
             _SETUP_CACHE[key] = setup(training, problem.latent_dim, problem.control_points, o["torque_margin"],
                                       torque_floor=o["torque_floor"], stride=o["training_stride"],
-                                      plant=o["plant_training"], robot=robot, base_dir=base_dir)
+                                      plant=o["plant_training"], robot=robot, base_dir=base_dir,
+                                      schedule=schedule)
         except ProblemError as exc:
             raise SolveError(f"problem {problem.name!r}, {exc}") from None
     return _SETUP_CACHE[key]
@@ -359,7 +367,8 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     if k is not None:
         path = joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
     elif o["leg_residual"] > 0:  # the left leg's learned joints get a bounded residual
-        path = leg_residual_path(js.gpdm, js.init["P"], [js.smap.learned_names.index(n) for n in leg_joints(js.model)],
+        path = leg_residual_path(js.gpdm, js.init["P"], [js.smap.learned_names.index(n)
+                                                               for n in leg_joints(js.model, foot_bodies(js.model, js.geom)[0])],
                                  o["leg_residual"])
     else:
         path = latent_path(GPLayer(js.gpdm), js.init["P"])
