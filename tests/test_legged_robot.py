@@ -113,6 +113,9 @@ def test_bad_robot_declarations_are_refused_with_the_key_named():
     swapped = _declared(G1_ROBOT.replace("[0.08, 0.0, -0.03]", "[0.115, 0.0, -0.03]"))  # the ball before the pad
     with pytest.raises(ProblemError, match=r"robot\.foot.*heel, ball, pad, toe"):
         swapped.geometry(g1, pin.neutral(g1))
+    sunk = _declared(G1_ROBOT.replace("[-0.05, 0.0, -0.03]", "[-0.05, 0.0, -0.04]"))  # the heel 1 cm lower
+    with pytest.raises(ProblemError, match=r"robot\.foot.*on the ground; ball 10\.0 mm, toe 10\.0 mm, pad 10\.0 mm"):
+        sunk.geometry(g1, _standing(g1, _declared(G1_ROBOT)))
     with pytest.raises(ProblemError, match=r"robot\.foot"):  # the feet's points not all declared
         _declared(G1_ROBOT.split("[robot.foot]")[0] + '[robot.foot]\nheel = { frame = "left_ankle_roll_link" }\n')
     with pytest.raises(ProblemError, match=r"robot\.mirror"):  # the mirror's strings do not name the joints

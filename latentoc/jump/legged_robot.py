@@ -39,6 +39,7 @@ from .contact import POINTS, ContactPoint, FootGeometry, foot_points
 __all__ = ["PointDeclaration", "RobotDeclaration", "CMU_HUMANOID", "ROBOT_KEYS", "declaration", "robot_model"]
 
 MIRROR_TOLERANCE = 1e-3  # m between a right frame and the mirror image of its left partner, standing
+FLAT_TOLERANCE = 5e-3  # m a point may stand above the lowest (the CMU's toe tip: 1 mm)
 LIMIT_SOURCES = ("training", "urdf")
 
 
@@ -99,6 +100,10 @@ class RobotDeclaration:
         geom.footprint = foot_points(model, d, geom)
         geom.right_points = tuple(_mirrored(model, d, c, geom.right[c.frame], geom.footprint[:, k])
                                   for k, c in enumerate(geom.points))
+        high = {k: z - ground for k, z in zip(POINTS, geom.footprint[2]) if z - ground > FLAT_TOLERANCE}
+        if high:  # the rows hold each point's height above its standing one: all must stand on the ground
+            raise ProblemError("key 'robot.foot': standing (the motion's first frame) every point must be on the "
+                               f"ground; {', '.join(f'{k} {1000 * h:.1f} mm' for k, h in high.items())} above it")
         x = dict(zip(POINTS, geom.footprint[0]))
         if not x["heel"] < x["ball"] < x["pad"] < x["toe"]:  # the centre of pressure rows' order
             raise ProblemError("key 'robot.foot': standing, the points must lie heel, ball, pad, toe from back to "
