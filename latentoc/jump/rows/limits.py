@@ -12,7 +12,7 @@ from ..robot import JumpRobot
 from ..wiring import Rows, Wiring
 from . import inputs
 
-LIMIT_BACKOFF = 1e-3  # rad and rad/s inside the limits: the rows hold between their samples too
+LIMIT_BACKOFF = 5e-3  # rad and rad/s inside the limits: the rows hold between their samples too (5 ms apart)
 
 
 def block(robot: JumpRobot, d: int) -> RobotBlock:
