@@ -68,9 +68,10 @@ class RobotDeclaration:
         left, right = self.mirror
         return frame.replace(left, right, 1)
 
-    def geometry(self, model: pin.Model, q_stand: np.ndarray) -> FootGeometry:
+    def geometry(self, model: pin.Model, q_stand: np.ndarray, on_ground: bool = True) -> FootGeometry:
         """The foot's points fixed in their frames from the standing pose ``q_stand`` (module doc),
-        each left frame's mirror partner checked against the model there."""
+        each left frame's mirror partner checked against the model there and, with ``on_ground``,
+        every point checked to stand on the ground."""
         d = model.createData()
         pin.framesForwardKinematics(model, d, q_stand)
         for key, p in zip(POINTS, self.foot):
@@ -101,7 +102,7 @@ class RobotDeclaration:
         geom.right_points = tuple(_mirrored(model, d, c, geom.right[c.frame], geom.footprint[:, k])
                                   for k, c in enumerate(geom.points))
         high = {k: z - ground for k, z in zip(POINTS, geom.footprint[2]) if z - ground > FLAT_TOLERANCE}
-        if high:  # the rows hold each point's height above its standing one: all must stand on the ground
+        if high and on_ground:  # the rows hold each point's height above its standing one: all must stand on the ground
             raise ProblemError("key 'robot.foot': standing (the motion's first frame) every point must be on the "
                                f"ground; {', '.join(f'{k} {1000 * h:.1f} mm' for k, h in high.items())} above it")
         x = dict(zip(POINTS, geom.footprint[0]))

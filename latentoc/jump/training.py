@@ -66,7 +66,7 @@ def symmetric_motion(Q: np.ndarray, t: np.ndarray, model: pin.Model, smap: Symme
     Y[:, antisymmetric_centre(smap)] = 0.0
     base = freeflyer_to_base(Q[:, :7])
     Qs = smap.to_full(Y, base_to_freeflyer(base)[0])
-    fp = robot.geometry(model, Qs[0]).footprint
+    fp = robot.geometry(model, Qs[0], on_ground=False).footprint  # where the ground is (checked by the set-up)
     assert fp is not None
     base[:, 0] -= fp[0, 2]
     base[:, 1] -= min(fp[2, k] for k, p in enumerate(robot.foot) if not p.ground)
