@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..jump.base import base_to_freeflyer
-from ..jump.cleaning import foot_bodies, leg_joints
+from ..jump.cleaning import learned_leg
 from ..jump.contact import POINTS, foot_points, joint_embedding
 from ..jump.problem import setup
 from ..jump.torque_limits import contact_torques
@@ -45,11 +45,6 @@ def _modes(ph, t: np.ndarray) -> dict[str, np.ndarray]:
     return {"heel": t <= ph.heel_off, "ball": t <= ph.ball_off, "toe": np.ones(t.shape, bool), "pad": t <= ph.ball_off}
 
 
-def _left_leg(model: pin.Model, smap, geom) -> np.ndarray:
-    """Positions in the learned coordinates of the left leg's joints (hip to toes)."""
-    return np.array(sorted(smap.learned_names.index(n) for n in leg_joints(model, foot_bodies(model, geom)[0])), int)
-
-
 def _gp_motion(js, t: np.ndarray) -> list[np.ndarray]:
     """The GP mean's learned coordinates and their first two time derivatives (Eq. 18, 26-28)
     along the start latent path at times t."""
@@ -63,7 +58,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
                  acc_weight: float = ACC_WEIGHT) -> dict:
     """The least-squares planted stance (module doc) and what it measures."""
     model, tr, ph, geom = js.model, js.training, js.phases, js.geom
-    E, leg = joint_embedding(js.smap), _left_leg(model, js.smap, geom)
+    E, leg = joint_embedding(js.smap), np.array(sorted(learned_leg(model, js.smap, geom)), int)
     t = np.arange(0.0, ph.takeoff + 0.5 / RATE, 1.0 / RATE)
     loaded = _modes(ph, t)
     Y_mu = _gp_motion(js, t)

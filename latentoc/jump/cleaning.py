@@ -23,11 +23,11 @@ import pinocchio as pin
 from ..mocap.symmetry import SymmetryMap
 from ..motions.planting import Plant, plant, taper
 from .base import base_to_freeflyer, freeflyer_to_base
-from .contact import POINTS, FootGeometry
+from .contact import POINTS, FootGeometry, point_joint
 from .phases import Phases
 from .training import JumpTraining
 
-__all__ = ["PlantedTraining", "foot_bodies", "leg_joints", "planted_training", "plantable"]
+__all__ = ["PlantedTraining", "foot_bodies", "leg_joints", "learned_leg", "planted_training", "plantable"]
 
 TAPER = 0.05  # s over which the correction fades into the flight
 TOE_RAMP = 0.05  # s over which the toe joint is brought to its standing angle before the heel loads
@@ -78,12 +78,14 @@ def plantable(phases: Phases) -> bool:
 def foot_bodies(model: pin.Model, geom: FootGeometry) -> tuple[str, str | None]:
     """The body the planting holds (the toe tip's: the CMU's toes, a rigid sole's foot) and the hinge
     between it and the heel's body (the CMU's toe joint; None for a rigid sole)."""
-    def joint(point: str) -> int:
-        return int(model.frames[model.getFrameId(geom.points[POINTS.index(point)].frame)].parentJoint)
-
-    jt = joint("toe")
+    jt = point_joint(model, geom, "toe")
     anchor = next(f.name for f in model.frames if f.parentJoint == jt and f.type == pin.FrameType.BODY)
-    return anchor, (model.names[jt] if joint("heel") != jt else None)
+    return anchor, (model.names[jt] if point_joint(model, geom, "heel") != jt else None)
+
+
+def learned_leg(model: pin.Model, smap: SymmetryMap, geom: FootGeometry) -> list[int]:
+    """Positions in the learned coordinates of the left leg's joints (:func:`leg_joints` of the planted body)."""
+    return [smap.learned_names.index(n) for n in leg_joints(model, foot_bodies(model, geom)[0])]
 
 
 def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phases: Phases,

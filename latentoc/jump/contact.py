@@ -107,6 +107,11 @@ class FootGeometry:
         return cls(tuple(pts), {frames[body[p]]: frames[half + body[p]] for p in POINTS})
 
 
+def point_joint(model: pin.Model, geom: FootGeometry, name: str) -> int:
+    """The joint that moves the left foot's point ``name`` (the parent joint of its frame)."""
+    return int(model.frames[model.getFrameId(geom.points[POINTS.index(name)].frame)].parentJoint)
+
+
 def points_function(sym: SymbolicModel, geom: FootGeometry) -> ca.Function:
     """(q) -> P (3 x 4): world heel, ball, toe, pad of the left foot as columns."""
     q = ca.SX.sym("q", sym.nq)

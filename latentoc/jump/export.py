@@ -103,7 +103,7 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
             **contact_geometry(robot.geom),
             "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,
             "tau_min": robot.limits.tau_min, "tau_max": robot.limits.tau_max, "friction": mu,
-            "model": model.saveToString(), **(robot.limit_arrays() if robot.has_joint_limits else {})}
+            "model": model.saveToString(), **(robot.model_limits.arrays() if robot.has_joint_limits else {})}
 
 
 def contact_geometry(geom: FootGeometry) -> dict[str, np.ndarray]:

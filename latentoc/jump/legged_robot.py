@@ -34,7 +34,7 @@ from ..errors import ProblemError
 from ..mocap.symmetry import MirrorError, SymmetryMap
 from ..robots.catalog import load_robot, robot_names
 from ..schema import Check, choice
-from .contact import POINTS, ContactPoint, FootGeometry, foot_points
+from .contact import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
 
 __all__ = ["PointDeclaration", "RobotDeclaration", "CMU_HUMANOID", "ROBOT_KEYS", "declaration", "robot_model"]
 
@@ -79,7 +79,7 @@ class RobotDeclaration:
                 if not model.existFrame(name):
                     raise ProblemError(f"key 'robot.foot.{key}': the model has no {what} {name!r}")
             L, R = (d.oMf[model.getFrameId(n)].translation for n in (p.frame, self.right_frame(p.frame)))
-            if np.linalg.norm(R - L * np.array([1.0, -1.0, 1.0])) > MIRROR_TOLERANCE:
+            if np.linalg.norm(R - MIRROR @ L) > MIRROR_TOLERANCE:
                 raise ProblemError(f"key 'robot.mirror': frame {self.right_frame(p.frame)!r} is not the mirror image "
                                    f"of {p.frame!r} standing ({R.round(4)} and {L.round(4)})")
         placed = {k: d.oMf[model.getFrameId(p.frame)] for k, p in zip(POINTS, self.foot)}
@@ -117,7 +117,7 @@ def _mirrored(model: pin.Model, d: pin.Data, c: ContactPoint, right: str, at: np
     if c.offset is None:
         return ContactPoint(c.name, right, None)
     M = d.oMf[model.getFrameId(right)]
-    return ContactPoint(c.name, right, M.rotation.T @ (at * np.array([1.0, -1.0, 1.0]) - M.translation))
+    return ContactPoint(c.name, right, M.rotation.T @ (MIRROR @ at - M.translation))
 
 
 #: the CMU humanoid (the defaults of ``[robot]``)

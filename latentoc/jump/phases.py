@@ -30,7 +30,7 @@ import pinocchio as pin
 
 from ..errors import ProblemError
 from ..mocap.jumps import detect_jumps
-from .contact import POINTS, FootGeometry, foot_points
+from .contact import POINTS, FootGeometry, foot_points, point_joint
 from .training import JumpTraining
 
 CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
@@ -175,15 +175,10 @@ def training_phases(model: pin.Model, tr: JumpTraining, geom: FootGeometry, sche
         settle = tr.t[-1]
     sched = contact_schedule(model, tr, geom, takeoff, touchdown) if schedule else {}
     sched.update({k: float(v) for k, v in declared.items() if k in sched})
-    rigid = _body(model, geom, "pad") == _body(model, geom, "ball")
+    rigid = point_joint(model, geom, "pad") == point_joint(model, geom, "ball")
     ph = Phases(takeoff, touchdown, float(max(settle, touchdown)), tr.duration, **sched, pad_with_ball=rigid)
     _check_order(ph, declared)
     return ph
-
-
-def _body(model: pin.Model, geom: FootGeometry, point: str) -> int:
-    """The joint that moves the point ``point`` of the left foot."""
-    return int(model.frames[model.getFrameId(geom.points[POINTS.index(point)].frame)].parentJoint)
 
 
 def _check_order(ph: Phases, declared: Mapping[str, float]) -> None:

@@ -31,7 +31,7 @@ from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, li
 from ..spline import BSpline
 from ..tube import TUBE, relative_tube, tube_delta
 from .base import base_to_freeflyer
-from .cleaning import PlantedTraining, foot_bodies, leg_joints, plantable, planted_training
+from .cleaning import PlantedTraining, learned_leg, plantable, planted_training
 from .contact import POINTS, FootGeometry, foot_points
 from .path import METHODS, joint_range_path, latent_path, leg_residual_path
 from .phases import SCHEDULE_ORDER, Phases, training_phases
@@ -367,9 +367,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     if k is not None:
         path = joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
     elif o["leg_residual"] > 0:  # the left leg's learned joints get a bounded residual
-        path = leg_residual_path(js.gpdm, js.init["P"], [js.smap.learned_names.index(n)
-                                                               for n in leg_joints(js.model, foot_bodies(js.model, js.geom)[0])],
-                                 o["leg_residual"])
+        path = leg_residual_path(js.gpdm, js.init["P"], learned_leg(js.model, js.smap, js.geom), o["leg_residual"])
     else:
         path = latent_path(GPLayer(js.gpdm), js.init["P"])
     delta = tube_delta(problem.tube, js.gpdm)

@@ -13,6 +13,7 @@ import casadi as ca
 import numpy as np
 
 from ..dynamics import SymbolicModel
+from ..min_torque.limits import Limits
 from ..mocap.symmetry import SymmetryMap
 from .base import base_function
 from .contact import POINTS, FootGeometry, joint_embedding, points_function
@@ -90,12 +91,10 @@ class JumpRobot:
     def joint_bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(lo, hi, v_max) of each learned coordinate: the model's position and velocity limits of its
         joint and, mirrored, of its right partner's (the tighter); +-inf where the model has none."""
-        m = self.sym.model
-        big = 1e30  # Pinocchio's "no limit" is the largest double
-        lower = np.where(m.lowerPositionLimit > -big, m.lowerPositionLimit, -np.inf)
-        upper = np.where(m.upperPositionLimit < big, m.upperPositionLimit, np.inf)
+        m, held = self.sym.model, self.model_limits
+        assert held.q_lo is not None and held.q_hi is not None and held.v_max is not None
+        lower, upper, vel = held.q_lo, held.q_hi, held.v_max
         v_of_q = {m.joints[j].idx_q: m.joints[j].idx_v for j in range(1, m.njoints) if m.joints[j].nq == 1}
-        vel = np.array([m.velocityLimit[v] if m.velocityLimit[v] < big else np.inf for v in range(m.nv)])
         qi = self.smap.learned_q
         lo, hi = lower[qi].copy(), upper[qi].copy()
         vmax = np.array([vel[v_of_q[int(q)]] for q in qi])
@@ -111,14 +110,10 @@ class JumpRobot:
         lo, hi, vmax = self.joint_bounds
         return self.joint_limits and bool(np.isfinite(lo).any() or np.isfinite(hi).any() or np.isfinite(vmax).any())
 
-    def limit_arrays(self) -> dict[str, np.ndarray]:
-        """The held joint limits as a result records them (q_min, q_max: nq; v_max: nv; +-inf: none,
-        as for the free-flyer's coordinates)."""
-        m, big = self.sym.model, 1e30
-        lo, hi, v = (np.array(x, float) for x in (m.lowerPositionLimit, m.upperPositionLimit, m.velocityLimit))
-        lo[:7], hi[:7], v[:6] = -np.inf, np.inf, np.inf
-        return {"q_min": np.where(lo > -big, lo, -np.inf), "q_max": np.where(hi < big, hi, np.inf),
-                "v_max": np.where(v < big, v, np.inf)}
+    @cached_property
+    def model_limits(self) -> Limits:
+        """The model's joint position and velocity limits, read as the fixed-base kind reads them."""
+        return Limits.of(self.sym.model, joint_limits=True, velocity_limits=True)
 
     # ------------------------------------------------------------- symbolic pieces
     def configuration(self, b, bd, bdd, y, yd, ydd):

@@ -44,8 +44,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import POINTS, FootGeometry, foot_points, point_jacobians
+from .contact import MIRROR, POINTS, FootGeometry, foot_points, point_jacobians
 from ..intervals import runs
+from ..min_torque.limits import Limits
 from ..kinematics import point_jacobian
 from ..support_polygon import feet_polygon
 from .zmp import G, zmp
@@ -55,15 +56,14 @@ LOADED = 0.01  # of body weight: a point pushing harder than this is loaded
 
 
 TOE = POINTS.index("toe")
-MIRROR = np.array([1.0, -1.0, 1.0])  # a left point to its right mirror image
 
 
 def _wrench_jacobian(model: pin.Model, d: pin.Data, frame_id: int, p: np.ndarray) -> np.ndarray:
     """(6, nv) Jacobian of the point ``p`` fixed to frame ``frame_id``'s body, world axes: a wrench
     about ``p`` (force, moment) acts on the joints through its transpose (placements and joint
     Jacobians computed)."""
-    J = pin.getFrameJacobian(model, d, frame_id, pin.LOCAL_WORLD_ALIGNED)
-    return np.vstack([J[:3] - pin.skew(p - d.oMf[frame_id].translation) @ J[3:], J[3:]])
+    return np.vstack([point_jacobian(model, d, frame_id, p),
+                      pin.getFrameJacobian(model, d, frame_id, pin.LOCAL_WORLD_ALIGNED)[3:]])
 
 
 def sagittal_contact_wrench(J_feet: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -90,7 +90,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict[str, np.ndar
     d = model.createData()
     mass = sum(i.mass for i in model.inertias)
     geom = FootGeometry.from_result(arrays)
-    toe_frame = geom.points[POINTS.index("toe")].frame
+    toe_frame = geom.points[TOE].frame
     ids = {side: model.getFrameId(geom.side_frame(side, toe_frame)) for side in "lr"}
     toe_pad = float(arrays.get("pad_setback", PAD_SETBACK))
     act = tmax - tmin > 1e-6
@@ -113,7 +113,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict[str, np.ndar
             pin.computeJointJacobians(model, d, q)
             pin.framesForwardKinematics(model, d, q)
         toe = foot_points(model, d, geom)[:, TOE]
-        JL, JR = (_wrench_jacobian(model, d, ids[side], p) for side, p in (("l", toe), ("r", MIRROR * toe)))
+        JL, JR = (_wrench_jacobian(model, d, ids[side], p) for side, p in (("l", toe), ("r", MIRROR @ toe)))
         out["feet_speed"][i] = np.linalg.norm(JL[:2] @ v) + np.linalg.norm(JR[:2] @ v)  # ground-projected (Eq. 33)
         out["toe_xz"][i] = toe[[0, 2]]
         if contact[i]:
@@ -195,11 +195,9 @@ def joint_limit_excess(arrays: dict) -> tuple[float, float]:
     result records as held (``q_min``, ``q_max``, ``v_max``; none recorded: 0) at its worst sample."""
     if "q_min" not in arrays:
         return 0.0, 0.0
-    q, v = np.asarray(arrays["q"]), np.asarray(arrays["v"])
-    lo, hi, vmax = (np.asarray(arrays[k], float) for k in ("q_min", "q_max", "v_max"))
-    pos = np.maximum(lo - q, q - hi)
-    vel = np.abs(v) - vmax
-    return float(max(0.0, pos.max(initial=0.0))), float(max(0.0, vel.max(initial=0.0)))
+    held = Limits(*(np.asarray(arrays[k], float) for k in ("q_min", "q_max", "v_max")))
+    out = held.violations({k: np.asarray(arrays[k]) for k in ("q", "v")})
+    return out["joint_limits_rad"], out["velocity_limits_rad_s"]
 
 
 def _min(x: np.ndarray) -> float:

@@ -67,18 +67,6 @@ def _limit_violations(settings: MinTorqueSettings, robot: pin.Model, motion: dic
     return out
 
 
-def _limit_arrays(nlp: MinTorqueNLP) -> dict[str, np.ndarray]:
-    """The limits the NLP enforced, as trajectory arrays (q_min, q_max, v_max, tau_min, tau_max)."""
-    lim, out = nlp.limits, dict[str, np.ndarray]()
-    if lim.q_lo is not None and lim.q_hi is not None:
-        out.update(q_min=lim.q_lo, q_max=lim.q_hi)
-    if lim.v_max is not None:
-        out["v_max"] = lim.v_max
-    if lim.tau_max is not None:
-        out.update(tau_min=-lim.tau_max, tau_max=lim.tau_max)
-    return out
-
-
 def _own_motion(problem: Problem, demo: Demonstration, settings: MinTorqueSettings, q: np.ndarray) -> dict[str, Any]:
     """The result's facts about the robot, the demonstration (and how far the motion's end poses q[0],
     q[-1] are from its first and last frames), the objective and the goal."""
@@ -118,5 +106,5 @@ def motion_result(problem: Problem, solved: Solved, settings: MinTorqueSettings,
         **_own_motion(problem, demo, settings, motion["q"])}
     trajectory = {"t": t, "q": motion["q"], "v": motion["v"], "a": motion["a"], "tau": motion["tau"], "P": P,
                   "P_initial": P0, "q_initial": initial["q"], "model": np.str_(robot.saveToString()),
-                  **_limit_arrays(nlp)}
+                  **nlp.limits.arrays()}
     return result, trajectory

@@ -62,6 +62,18 @@ class Limits:
             v_max = _positive(model.velocityLimit)
         return cls(q_lo, q_hi, v_max, torque_limit_vector(torque_limits, model))
 
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The limits that hold as a result's trajectory records them (q_min, q_max, v_max, tau_min,
+        tau_max; those switched off left out)."""
+        out: dict[str, np.ndarray] = {}
+        if self.q_lo is not None and self.q_hi is not None:
+            out.update(q_min=self.q_lo, q_max=self.q_hi)
+        if self.v_max is not None:
+            out["v_max"] = self.v_max
+        if self.tau_max is not None:
+            out.update(tau_min=-self.tau_max, tau_max=self.tau_max)
+        return out
+
     def slacks(self, motion: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """The smallest distance to each limit at every sample (negative: violated), per kind:
         ``joint_limits_rad``, ``velocity_limits_rad_s``, ``torque_limits_nm``."""
