@@ -1,5 +1,21 @@
 """``python -m latentoc``: see :mod:`latentoc.cli`."""
+from .interrupts import defer_at_start
 
-from .cli import main
+defer_at_start()  # before any other import: a Ctrl-C from here on ends in "latentoc: interrupted"
 
-raise SystemExit(main())
+import os  # noqa: E402
+import signal  # noqa: E402
+import sys  # noqa: E402
+
+from .cli import main  # noqa: E402
+
+code = main()
+signal.signal(signal.SIGINT, signal.SIG_IGN)  # the command is over: a late Ctrl-C does not end Python's exit
+if code == 130:  # interrupted: exit now, as a KeyboardInterrupt that passed through an extension's
+    for stream in (sys.stdout, sys.stderr):  # init would make Python's exit kill the process by SIGINT
+        try:
+            stream.flush()
+        except OSError:
+            pass
+    os._exit(130)
+raise SystemExit(code)

@@ -8,22 +8,22 @@ solve that Ipopt does not finish successfully exits with code 1 and writes nothi
 code 1. Ctrl-C prints ``latentoc: interrupted`` and exits with code 130, writing no result of the
 interrupted solve; a closed stdout (``latentoc list | head``) ends quietly with code 141.
 This module parses the command line; each command is :mod:`latentoc.commands`' ``cmd_<name>``
-(``simulate``: :func:`latentoc.simulate.command.cmd_simulate`).
+(``simulate``: :func:`latentoc.simulate.command.cmd_simulate`), imported when it runs, so that
+``--help`` and an arm solve load only what they use.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-from . import commands
 from .errors import LatentocError
-from .kinds import KINDS
-from .simulate import command as simulate
+from .interrupts import CommandLine
 
 __all__ = ["main"]
 
@@ -66,8 +66,8 @@ def _solve_arguments(sub: Any) -> None:
                    help="the latent B-spline's control points m (default: the problem's)")
     s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None,
                    help="Ipopt's Hessian: exact (CasADi) or its L-BFGS approximation (default: the problem's)")
-    s.add_argument("--method", choices=list(dict.fromkeys(m for k in KINDS.values() for m in k.methods)),
-                   default="latent", help="a method of the problem's kind (latentoc.kinds)")
+    s.add_argument("--method", default="latent",
+                   help="a method of the problem's kind: latent (default) or joint-range (latentoc.kinds)")
     s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>-<method>)")
     s.add_argument("--quiet", action="store_true", help="no progress display")
@@ -187,8 +187,9 @@ def _simulate_arguments(sub: Any) -> None:
     """The ``simulate`` command's arguments."""
     sm = sub.add_parser("simulate", help="replay a result's torques in MuJoCo: simulation.json, simulation.npz")
     sm.add_argument("result", type=Path, help="a result folder with foot contacts (result.json, trajectory.npz)")
-    sm.add_argument("--kp", type=float, default=simulate.DEFAULT_KP,
-                    help=f"joint stiffness tracking the plan, N m/rad, every joint (default {simulate.DEFAULT_KP:g})")
+    sm.add_argument("--kp", type=float, default=None,
+                    help="joint stiffness tracking the plan, N m/rad, every joint (default: latentoc.simulate's "
+                         "DEFAULT_KP)")
     sm.add_argument("--kd", type=float, default=None,
                     help="joint damping, N m s/rad, every joint (default: critical, 2 sqrt(kp I) per joint)")
     sm.add_argument("--out", type=Path, default=None, help="output folder (default: RESULT)")
@@ -214,12 +215,19 @@ _ARGUMENTS = (_solve_arguments, _learn_arguments, _plot_arguments, _view_argumen
               _list_arguments, _sweep_arguments, _start_poses_arguments, _reproduce_arguments, _bench_arguments,
               _simulate_arguments, _retarget_arguments)
 
-#: command name -> its implementation (:mod:`latentoc.commands`)
-COMMANDS = {"plot": commands.cmd_plot, "view": commands.cmd_view, "notebooks": commands.cmd_notebooks,
-            "list": commands.cmd_list, "show": commands.cmd_show, "learn": commands.cmd_learn,
-            "solve": commands.cmd_solve, "sweep": commands.cmd_sweep, "reproduce": commands.cmd_reproduce,
-            "start-poses": commands.cmd_start_poses, "bench": commands.cmd_bench,
-            "simulate": simulate.cmd_simulate, "retarget": commands.cmd_retarget}
+#: command name -> its implementation, "module:function" (:mod:`latentoc.commands`)
+COMMANDS = {name: f"latentoc.commands:cmd_{name.replace('-', '_')}"
+            for name in ("plot", "view", "notebooks", "list", "show", "learn", "solve", "sweep", "reproduce",
+                         "start-poses", "bench", "retarget")} | {"simulate": "latentoc.simulate.command:cmd_simulate"}
+
+
+def _command(args: argparse.Namespace) -> Callable[[argparse.Namespace], int]:
+    """The implementation of ``args.command``, imported now (and the defaults its module holds)."""
+    module, name = COMMANDS[args.command].split(":")
+    imported = importlib.import_module(module)
+    if args.command == "simulate" and args.kp is None:
+        args.kp = imported.DEFAULT_KP
+    return getattr(imported, name)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -233,23 +241,27 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code."""
-    parser = _parser()
-    args = parser.parse_args(argv)
     from .progress import quiet, set_quiet
 
+    session = CommandLine()
     was_quiet = quiet()
-    set_quiet(was_quiet or getattr(args, "quiet", False))
     try:
-        return COMMANDS[args.command](args)
-    except LatentocError as exc:
-        print(f"latentoc: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("latentoc: interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:  # the reader of stdout has gone (| head): stop quietly, as Unix tools do
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())  # Python's flush at exit would fail again
-        return 141
+        session.start()
+        args = _parser().parse_args(argv)
+        set_quiet(was_quiet or getattr(args, "quiet", False))
+        return _command(args)(args)
+    except BaseException as exc:
+        if session.interrupted(exc):  # also an error that a SIGINT caused inside C code or an import
+            print("latentoc: interrupted", file=sys.stderr)
+            return 130
+        if isinstance(exc, LatentocError):
+            print(f"latentoc: error: {exc}", file=sys.stderr)
+            return 2
+        if isinstance(exc, BrokenPipeError):  # the reader of stdout has gone (| head): stop quietly, as Unix tools do
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())  # Python's flush at exit would fail again
+            return 141
+        raise
     finally:
+        session.end()
         set_quiet(was_quiet)

@@ -14,6 +14,7 @@ from typing import Any
 
 from .errors import LatentocError, SweepError
 from .files import check_out_dir
+from .interrupts import finish
 from .results import Result
 
 __all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
@@ -180,6 +181,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if not r.success and not args.keep_failed:
         print("latentoc: solve did not succeed; nothing written (use --keep-failed to write anyway)", file=sys.stderr)
         return 1
+    if not args.plots:
+        finish()  # the result is written whole, or (Ctrl-C before this line) not at all
     paths = r.save(out)
     print("  wrote " + ", ".join(str(p) for p in paths))
     if args.plots:
@@ -237,6 +240,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 cluster.close()
     print(format_table(outcome.results))
     if out is not None:
+        if not args.plots:
+            finish()  # sweep.json is written whole, or (Ctrl-C before this line) not at all
         meta = {"problem": problem.name, "tubes": tubes, "ranges": ranges, "workers": args.workers,
                 "scheduler": args.scheduler, "warm_start": client is None and not args.cold}
         print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))

@@ -7,17 +7,24 @@ SIGINT that arrives inside its block (and raises KeyboardInterrupt as Python's d
 does), so that a block that returns normally after a swallowed SIGINT, or fails with another
 error because of it (CasADi may turn it into a SystemError), raises KeyboardInterrupt at its end:
 ``latentoc.solve`` runs each kind's solver inside it.
+
+The command line (:class:`CommandLine`) owns SIGINT from the first line of ``python -m latentoc``:
+counted while its modules load, then the first one raises KeyboardInterrupt and later ones are
+only counted, so that the unwinding and the message are never interrupted; a KeyboardInterrupt
+lost inside a destructor is not printed and is raised again; once the result is written
+(:func:`finish`) Ctrl-C is ignored.
 """
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager, contextmanager
 from types import FrameType
 from typing import Any
 
-__all__ = ["watching", "deferred", "interrupts_seen"]
+__all__ = ["watching", "deferred", "interrupts_seen", "defer_at_start", "CommandLine", "finish"]
 
 _seen = 0  # SIGINTs received by the handler of this module
 
@@ -74,4 +81,106 @@ def deferred() -> AbstractContextManager[None]:
     KeyboardInterrupt starts inside C code that calls back into Python (Ipopt's callbacks check the
     count and stop the solver instead); KeyboardInterrupt at the block's end if one arrived. Only in
     the main thread, and only over Python's default handler or :func:`watching`'s."""
-    return _handled(_count, (signal.default_int_handler, _record))
+    return _handled(_count, (signal.default_int_handler, _record, _once))
+
+
+_started: int | None = None  # SIGINTs seen when python -m latentoc started (defer_at_start)
+_armed = False  # the command line's next SIGINT raises KeyboardInterrupt
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+def defer_at_start() -> None:
+    """The first line of ``python -m latentoc``: SIGINT counted, not raised, while the modules load
+    (a KeyboardInterrupt inside an extension's import is printed by it or becomes another error);
+    :class:`CommandLine` raises it once they have. Nothing where SIGINT is not Python's default
+    (ignored by the parent, or an application's own handler)."""
+    global _started
+    if _main_thread() and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        _started = _seen
+        signal.signal(signal.SIGINT, _count)
+
+
+def _once(signum: int, frame: FrameType | None) -> None:
+    """The command line's handler: KeyboardInterrupt once, then SIGINTs only counted."""
+    global _seen, _armed
+    _seen += 1
+    if _armed:
+        _armed = False
+        raise KeyboardInterrupt
+
+
+def _unraisable(hook: Callable[..., object]) -> Callable[..., object]:
+    """sys.unraisablehook for the command line: a KeyboardInterrupt that a destructor swallowed (or
+    an error it caused) is not printed, and is raised again in the main thread."""
+    def quiet(args: Any) -> None:
+        global _armed
+        if isinstance(args.exc_value, KeyboardInterrupt):
+            _armed = True
+            import _thread
+
+            _thread.interrupt_main()
+        elif not _interrupted_since(_baseline):
+            hook(args)
+    return quiet
+
+
+_baseline = 0  # SIGINTs seen when the current command line started
+
+
+def _interrupted_since(count: int) -> bool:
+    return _seen > count
+
+
+class CommandLine:
+    """SIGINT for one run of the command line (module doc): :meth:`start` before the command,
+    :meth:`interrupted` to tell an interrupt from an error, :meth:`end` after it."""
+
+    def __init__(self) -> None:
+        global _baseline
+        self.baseline = _seen if _started is None else _started
+        _baseline = self.baseline
+        self.previous: Any = None
+        self.hook = sys.unraisablehook
+
+    def start(self) -> None:
+        """Raise KeyboardInterrupt at the first SIGINT from now on (at once if one came while the
+        modules loaded)."""
+        global _armed
+        if not _main_thread():
+            return
+        current = signal.getsignal(signal.SIGINT)
+        if current is signal.default_int_handler or current is _count:
+            self.previous = current
+            _armed = True
+            sys.unraisablehook = _unraisable(self.hook)
+            signal.signal(signal.SIGINT, _once)
+        if _seen > self.baseline:
+            _armed = False
+            raise KeyboardInterrupt
+
+    def interrupted(self, exc: BaseException) -> bool:
+        """Whether ``exc`` ends the command because of Ctrl-C: a KeyboardInterrupt, or any error
+        raised after a SIGINT (C code turns one into a SystemError, an import into an ImportError)."""
+        return isinstance(exc, KeyboardInterrupt) or _seen > self.baseline
+
+    def end(self) -> None:
+        """SIGINT back to its handler before :meth:`start` (in ``python -m latentoc``: counted,
+        until the process exits)."""
+        global _armed
+        _armed = False
+        if self.previous is not None and _main_thread():
+            signal.signal(signal.SIGINT, self.previous)
+            if self.previous is not _count:
+                sys.unraisablehook = self.hook
+
+
+def finish() -> None:
+    """The command's result is being written: from here Ctrl-C is ignored, so that a command is
+    either interrupted with nothing written or ends with its result whole (command line only)."""
+    global _armed
+    if _main_thread() and signal.getsignal(signal.SIGINT) is _once:
+        _armed = False
+        signal.signal(signal.SIGINT, signal.SIG_IGN)

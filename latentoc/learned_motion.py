@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from .files import NPZ_ERRORS, dumps_json
+from .interrupts import finish
 from .gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
 from .motions import Demonstration, check_frames, demonstration_from_file
 from .results import GPDM_NAME, write_files
@@ -151,6 +152,7 @@ def learn_file(path: str | Path, robot: str, out: str | Path, *, latent_dim: int
         files.update(figures(learned, Path(path).stem))
     summary = {"robot": robot, **learned.summary()}
     files[LEARN_NAME] = dumps_json(summary).encode()
+    finish()  # on the command line: the folder is written whole, or (Ctrl-C before this line) not at all
     return learned, write_files(files, out, marker=LEARN_NAME)
 
 

@@ -41,7 +41,7 @@ class _Lines(tqdm):
         return None
 
     def close(self) -> None:
-        if not self.disable:
+        if not getattr(self, "disable", True):  # a Ctrl-C inside tqdm's __init__ leaves it unset
             post = f", {self.postfix}" if self.postfix else ""
             self._line(f"done, {self.n} {self.unit} in {self._time() - self.start_t:.1f} s{post}")
         super().close()

@@ -24,6 +24,7 @@ import casadi as ca
 
 from ..errors import LatentocError
 from ..files import exclusive_lock
+from ..interrupts import interrupts_seen
 from ..paths import cache_dir
 from ..progress import bar
 
@@ -133,11 +134,17 @@ class Compiler:
     def __enter__(self) -> "Compiler":
         return self
 
-    def __exit__(self, *exc) -> None:
-        for f in self.futures:
-            f.result()
-        self.pool.shutdown()
-        self.bar.close()
+    def __exit__(self, kind, *exc) -> None:
+        try:
+            if kind is None:
+                for f in self.futures:
+                    f.result()
+        except BaseException:
+            kind = BaseException
+            raise
+        finally:  # after an error or Ctrl-C the libraries not started are not needed
+            self.pool.shutdown(wait=kind is None, cancel_futures=kind is not None)
+            self.bar.close()
 
     def submit(self, label: str, source: str, flags: tuple[str, ...]):
         lib = library_path(source, flags)
@@ -152,7 +159,7 @@ class Compiler:
         return fut
 
     def _build(self, label: str, source: str, flags: tuple[str, ...], lib: Path) -> Path | None:
-        cache = cache_dir()
+        cache, seen = cache_dir(), interrupts_seen()
         try:
             cache.mkdir(parents=True, exist_ok=True)
             # one process compiles a library others need at once; the others wait and find it
@@ -172,6 +179,8 @@ class Compiler:
                 os.replace(tmp_sum, _checksum_file(lib))
                 os.replace(so_file, lib)
         except (OSError, subprocess.CalledProcessError) as exc:
+            if interrupts_seen() > seen or getattr(exc, "returncode", 0) < 0:  # Ctrl-C reached the compiler too
+                return None
             detail = getattr(exc, "stderr", "") or str(exc)
             warnings.warn(f"compiling {label} failed ({detail.strip()[:200]}): evaluating without JIT", stacklevel=3)
             return None
