@@ -9,20 +9,45 @@ The public API (docs/api.md)::
     again = latentoc.load_result("out/arm-raise")
     sweep = latentoc.sweep(problem, ["2x", "5x"], executor=None)  # or a dask.distributed Client
 
-Every error about the input is a :class:`LatentocError`.
+Every error about the input is a :class:`LatentocError`. The names are imported at their first use
+(``python -m latentoc --help`` loads none of them).
 """
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from .version import __version__
 
-from .api import solve
-from .dynamics import SymbolicModel
-from .errors import LatentocError
-from .gpdm import GPDM, GPDMSettings, learn_gpdm
-from .problem import Problem
-from .problem_files import load_problem, problem_names
-from .results import Result, load_result
-from .robots import load_robot
-from .tube_sweep import SweepResult, sweep
+#: public name -> the module that defines it
+_WHERE = {"solve": "api", "SymbolicModel": "dynamics", "LatentocError": "errors", "GPDM": "gpdm",
+          "GPDMSettings": "gpdm", "learn_gpdm": "gpdm", "Problem": "problem", "load_problem": "problem_files",
+          "problem_names": "problem_files", "Result": "results", "load_result": "results", "load_robot": "robots",
+          "SweepResult": "tube_sweep", "sweep": "tube_sweep"}
 
 __all__ = ["__version__", "load_problem", "problem_names", "Problem", "solve", "Result", "load_result", "sweep",
            "SweepResult", "learn_gpdm", "GPDM", "GPDMSettings", "load_robot", "SymbolicModel", "LatentocError"]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _WHERE:
+        raise AttributeError(f"module 'latentoc' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+if TYPE_CHECKING:
+    from .api import solve
+    from .dynamics import SymbolicModel
+    from .errors import LatentocError
+    from .gpdm import GPDM, GPDMSettings, learn_gpdm
+    from .problem import Problem
+    from .problem_files import load_problem, problem_names
+    from .results import Result, load_result
+    from .robots import load_robot
+    from .tube_sweep import SweepResult, sweep
