@@ -1,9 +1,11 @@
-"""Clamped uniform B-splines on [0, T] (paper Eq. 5, 20, 23-25).
+"""Clamped B-splines on [0, T] (paper Eq. 5, 20, 23-25).
 
 ``x(t, P) = sum_i p_i B_i(t)`` with ``m`` control points ``P`` (m x d). The knot vector is
-clamped (the curve starts at ``p_1`` and ends at ``p_m``) and uniform inside. The basis
-matrices are numeric, so in a transcription ``x(t_k)``, ``xdot(t_k)``, ``xddot(t_k)`` are
-linear maps of the control points.
+clamped (the curve starts at ``p_1`` and ends at ``p_m``) and uniform inside, or uniform within
+each phase of a motion with repeated knots at the phase events (:meth:`BSpline.phased`): a knot
+of multiplicity k lowers a cubic's continuity there to C^(3-k). The basis matrices are numeric,
+so in a transcription ``x(t_k)``, ``xdot(t_k)``, ``xddot(t_k)`` are linear maps of the control
+points.
 """
 
 from __future__ import annotations
@@ -24,11 +26,34 @@ class SplineInputError(LatentocError, ValueError):
 
 @dataclass(frozen=True)
 class BSpline:
-    """A clamped uniform B-spline basis with ``n_control`` control points on ``[0, duration]``."""
+    """A clamped B-spline basis with ``n_control`` control points on ``[0, duration]``: uniform
+    inside, or with the interior knots ``inner`` (ascending, repeats allowed)."""
 
     n_control: int
     duration: float
     degree: int = 3
+    inner: tuple[float, ...] | None = None
+
+    @classmethod
+    def phased(cls, duration: float, events: list[float], intervals: list[int], multiplicity: list[int],
+               degree: int = 3) -> "BSpline":
+        """Uniform knots within each phase between the ``events`` (``intervals[i]`` polynomial pieces
+        in phase i), each event a knot of ``multiplicity[i]`` (2: C1 for a cubic)."""
+        bounds = [0.0, *map(float, events), float(duration)]
+        if len(intervals) != len(bounds) - 1 or len(multiplicity) != len(events):
+            raise SplineInputError(f"{len(events)} events need {len(events) + 1} phase interval counts and "
+                                   f"{len(events)} multiplicities, got {len(intervals)} and {len(multiplicity)}")
+        if any(b <= a for a, b in zip(bounds, bounds[1:])):
+            raise SplineInputError(f"phase events must lie strictly inside (0, {duration}) in ascending order, got {events}")
+        if any(int(n) < 1 for n in intervals) or any(not 1 <= int(k) <= degree for k in multiplicity):
+            raise SplineInputError(f"each phase needs at least one interval and each event a multiplicity "
+                                   f"from 1 to {degree}, got {intervals} and {multiplicity}")
+        inner: list[float] = []
+        for i, (a, b) in enumerate(zip(bounds, bounds[1:])):
+            inner.extend(np.linspace(a, b, int(intervals[i]) + 1)[1:-1].tolist())
+            if i < len(events):
+                inner.extend([b] * int(multiplicity[i]))
+        return cls(len(inner) + degree + 1, float(duration), degree, tuple(inner))
 
     def __post_init__(self) -> None:
         if self.degree < 1:
@@ -39,17 +64,21 @@ class BSpline:
             )
         if not np.isfinite(self.duration) or self.duration <= 0:
             raise SplineInputError(f"spline duration must be a positive number, got {self.duration}")
+        if self.inner is not None and len(self.inner) != self.n_control - self.degree - 1:
+            raise SplineInputError(f"{self.n_control} control points of degree {self.degree} need "
+                                   f"{self.n_control - self.degree - 1} interior knots, got {len(self.inner)}")
 
     @property
     def knots(self) -> np.ndarray:
-        """Clamped knot vector: ``degree + 1`` repeated knots at each end, uniform inside."""
-        inner = np.linspace(0.0, self.duration, self.n_control - self.degree + 1)
-        return np.concatenate([np.zeros(self.degree), inner, np.full(self.degree, self.duration)])
+        """Clamped knot vector: ``degree + 1`` repeated knots at each end, the interior ones between."""
+        inner = np.linspace(0.0, self.duration, self.n_control - self.degree + 1)[1:-1] if self.inner is None \
+            else np.asarray(self.inner, float)
+        return np.concatenate([np.zeros(self.degree + 1), inner, np.full(self.degree + 1, self.duration)])
 
     @property
     def breakpoints(self) -> np.ndarray:
         """The distinct knots: the curve is a polynomial between consecutive breakpoints."""
-        return np.linspace(0.0, self.duration, self.n_control - self.degree + 1)
+        return np.unique(self.knots)
 
     def basis(self, t: np.ndarray, derivative: int = 0) -> np.ndarray:
         """Matrix ``B`` (len(t) x m) with ``B[k, i] = d^r B_i / dt^r (t_k)`` (Eq. 23-25)."""

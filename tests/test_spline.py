@@ -72,3 +72,36 @@ def test_smoothing_rows_integrate_the_squared_second_derivative():
     t = np.linspace(0.0, 2.0, 50)
     P = sp.fit(t, t[:, None] ** 3)
     assert np.isclose(np.sum((sp.smoothing_rows(0.5) @ P) ** 2), 0.5 * 96.0, rtol=1e-2)
+
+
+def test_phased_knots_lower_the_continuity_at_the_events_only():
+    """BSpline.phased: a double knot at each event leaves the path and its velocity continuous there
+    and lets the acceleration jump (C1), uniform pieces in each phase (C2 at their joints), against
+    one-sided values; a single knot keeps C2; piecewise cubics of the phases are fitted exactly."""
+    sp = BSpline.phased(1.3, [0.2, 0.3, 0.7], [2, 1, 4, 5], [2, 2, 1])
+    assert sp.n_control == len(sp.knots) - 4 and sp.n_control == 2 + 1 + 4 + 5 + 3 - 1 + 3
+    np.testing.assert_allclose(sp.breakpoints, [0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.82, 0.94, 1.06, 1.18, 1.3])
+    P = np.random.default_rng(3).normal(size=(sp.n_control, 2))
+    e = 1e-10
+    for t, jumps in ((0.2, True), (0.3, True), (0.7, False), (0.5, False)):
+        left, right = ([sp.evaluate(P, [t + s], k) for k in range(3)] for s in (-e, e))
+        np.testing.assert_allclose(left[0], right[0], atol=1e-8)
+        np.testing.assert_allclose(left[1], right[1], atol=1e-6)
+        assert (np.abs(left[2] - right[2]).max() > 1.0) == jumps
+    # a motion made of a different cubic on each side of a double knot is in the space
+    t = np.linspace(0, 1.3, 200)
+    s = t - 0.3  # C1 at 0.3: 1.027, slope 0.27 both sides
+    x = np.where(s < 0, 1 + t ** 3, 1.027 + 0.27 * s + 0.9 * s ** 2 - 2 * s ** 3)
+    fit = sp.fit(t, x[:, None], fix_ends=False)
+    np.testing.assert_allclose(sp.evaluate(fit, t)[:, 0], x, atol=1e-10)
+
+
+def test_phased_spline_refuses_events_and_counts_that_do_not_fit():
+    with pytest.raises(SplineInputError, match="events must lie strictly inside"):
+        BSpline.phased(1.0, [0.5, 0.4], [1, 1, 1], [2, 2])
+    with pytest.raises(SplineInputError, match="need 3 phase interval counts"):
+        BSpline.phased(1.0, [0.4, 0.5], [1, 1], [2, 2])
+    with pytest.raises(SplineInputError, match="multiplicity from 1 to 3"):
+        BSpline.phased(1.0, [0.4], [1, 1], [4])
+    with pytest.raises(SplineInputError, match="interior knots"):
+        BSpline(8, 1.0, inner=(0.5,))
