@@ -8,6 +8,7 @@ formats a solved result from its schema alone (:class:`~latentoc.results.Result`
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -43,12 +44,12 @@ def cmd_learn(args: argparse.Namespace) -> int:
     if args.stride < 1 or args.latent_dim < 1:
         raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
     check_out_dir(args.out)
-    learned, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
+    _, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
                                 plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
                                 start=args.start, stop=args.stop, fps=args.fps,
                                 fixed_pose={n: v for n, v in args.hold if v is not None},
                                 locked=[n for n, v in args.hold if v is None])
-    s = learned.summary()
+    s = json.loads(next(p for p in paths if p.name == "learn.json").read_text())  # learned.summary(), as written
     demo = s["demonstration"]
     print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
           f"{len(demo['joints'])} joints" + (f", {len(demo['locked_joints'])} locked" if demo["locked_joints"] else "")
@@ -302,8 +303,6 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
     if args.figures:
         from .readme_figures import make_figures
-
-        import json
 
         written = make_figures()
         print("wrote " + ", ".join(str(p) for p in written))
