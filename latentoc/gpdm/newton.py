@@ -100,6 +100,9 @@ def minimize_newton(evaluate: Callable[[np.ndarray], Point | None], hessian: Cal
                         converged=converged, message=message)
 
 
+NOISE = 64 * float(np.finfo(float).eps)  # relative rounding of L summed over its terms
+
+
 @dataclass
 class _Step:
     z: np.ndarray | None
@@ -114,10 +117,13 @@ def _damped_step(evaluate: Callable[[np.ndarray], Point | None], z: np.ndarray, 
     """One accepted Levenberg step s = -V (V^T g / (a + mu)), mu raised until L falls; z None if it
     never does. mu afterwards follows rho, the actual over the predicted decrease."""
     gv = V.T @ point.g
+    noise = NOISE * abs(point.f)  # a decrease L's rounding cannot tell from none
     for k in range(80):
         c = gv / (a + mu)
         trial = np.clip(z - V @ c, lower, upper)
         predicted = float(np.sum(gv * c) - 0.5 * np.sum(a * c * c))
+        if predicted <= noise:  # more damping predicts less: no step can be seen to lower L
+            return _Step(None, point, mu, -1.0, k)
         new = evaluate(trial)
         rho = (point.f - new.f) / predicted if new is not None and predicted > 0 else -1.0
         if new is not None and np.isfinite(new.f) and rho > 1e-4:
