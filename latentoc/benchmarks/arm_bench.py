@@ -1,11 +1,11 @@
 """Arm benchmark: the first solve on an empty cache, warm solve times and where they go.
 
 Run: ``python -m latentoc bench arm [--problem arm-raise] [--tubes 5x] [--ranges 20 60]
-[--repeat 5] [--no-first]``. Targets: the first solve <= 10 s, the 5x solve <= 0.3 s.
+[--repeat 5] [--no-first]``. Targets (issue 46): the first solve <= 5 s, the 5x solve <= 0.3 s.
 
 * first solve: ``python -m latentoc solve`` in a subprocess with a new, empty
-  ``$LATENTOC_CACHE`` (so every robot block is generated and compiled), wall time from
-  process start to exit (imports, GPDM learning, compilation, Ipopt, the 1 kHz export);
+  ``$LATENTOC_CACHE`` (so every robot block is generated and compiled, its large pieces quickly:
+  :mod:`latentoc.nlp.upgrade`), wall time from process start to exit and where it goes (:func:`split`);
 * warm solves: each NLP (:mod:`latentoc.min_torque.nlp`) built once, then solved ``--repeat``
   times from the training fit; the median wall and CPU time, Ipopt's iterations, and per
   callback (:attr:`latentoc.nlp.ipopt.IpoptResult.timings`) ms per call x calls, plus what is
@@ -39,7 +39,7 @@ from latentoc.results import load_result
 from latentoc.robots import load_robot
 from latentoc.tube import resolve_tube
 
-TARGET_FIRST_S, TARGET_5X_S = 10.0, 0.3
+TARGET_FIRST_S, TARGET_5X_S = 5.0, 0.3
 CALLBACKS = (("f", "nlp_f"), ("g", "nlp_g"), ("grad_f", "nlp_grad_f"), ("jac_g", "nlp_jac_g"), ("hess", "nlp_hess_l"))
 
 
@@ -55,8 +55,27 @@ def first_solve(problem: str, tube: str) -> dict:
         if run.returncode != 0:
             raise RuntimeError(f"{' '.join(cmd)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
         r = load_result(os.path.join(tmp, "out"))
-    return {"wall": wall, "gpdm_time_s": r.times.gpdm_s, "build_time_s": r.times.build_s,
-            "solve_time_s": r.times.solve_s, "iterations": r.iterations, "cost": r.cost, "status": r.status}
+    t = r.times
+    return {"wall": wall, "imports": _imports(), "gpdm_time_s": t.gpdm_s, "compile_time_s": t.compile_s,
+            "build_time_s": t.build_s, "solve_time_s": t.solve_s, "check_time_s": t.check_s, "total_s": t.total_s,
+            "iterations": r.iterations, "cost": r.cost, "status": r.status}
+
+
+def _imports() -> float:
+    """Wall of a Python process that imports what ``solve`` of an arm problem imports, then exits."""
+    code = "import latentoc.commands, latentoc.api, latentoc.problem_files, latentoc.min_torque.kind"
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], check=True)
+    return time.perf_counter() - t0
+
+
+def split(r: dict) -> str:
+    """Where a first solve's wall goes: Python's start and the imports, then the solve's own times
+    (result.json), and the rest (reading the problem, loading libraries, writing the folder)."""
+    rest = r["wall"] - r["imports"] - r["total_s"]
+    return (f"Python start and imports {r['imports']:.2f} s, GPDM {r['gpdm_time_s']:.2f} s, code generation and "
+            f"compiling {r['compile_time_s']:.2f} s, NLP build {r['build_time_s']:.2f} s, Ipopt {r['solve_time_s']:.2f} s,"
+            f" 1 kHz checks {r['check_time_s']:.2f} s, the rest (problem, libraries, writing) {rest:.2f} s")
 
 
 def warm_solves(nlp, problem, repeat: int) -> dict:
@@ -99,9 +118,8 @@ def main(argv: list[str] | None = None) -> int:
         r = first_solve(args.problem, tube)
         verdict = "met" if r["wall"] <= TARGET_FIRST_S else "NOT met"
         print(f"first solve ({args.problem}, tube {tube}, empty cache, subprocess wall): {r['wall']:.2f} s "
-              f"(target {TARGET_FIRST_S:g} s: {verdict}); inside: gpdm {r['gpdm_time_s']:.2f} s, build incl. "
-              f"compiling {r['build_time_s']:.2f} s, solve {r['solve_time_s']:.2f} s, {r['iterations']} iterations, "
-              f"cost {r['cost']:.4f}, {r['status']}", flush=True)
+              f"(target {TARGET_FIRST_S:g} s: {verdict}), {r['iterations']} iterations, cost {r['cost']:.4f}, "
+              f"{r['status']}\n  {split(r)}", flush=True)
 
     set_quiet(True)  # no progress bars between the table's lines
     gp, gpdm_time = problem_gpdm(problem)

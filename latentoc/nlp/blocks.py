@@ -39,7 +39,7 @@ import casadi as ca
 import numpy as np
 
 from ..progress import bar
-from . import jit
+from . import jit, upgrade
 
 __all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks", "compile_seconds"]
 
@@ -230,17 +230,24 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
 
 
 def _compile(todo: list[RobotBlock]) -> None:
-    """Build, compile (or find compiled) and load the derivative libraries of the blocks ``todo``."""
+    """Build, compile (or find compiled) and load the derivative libraries of the blocks ``todo``; a
+    large hot piece's quick library first, its optimised one in the background (:mod:`.upgrade`)."""
     fns: dict[str, dict[str, ca.Function]] = {}
     futures: dict[str, list] = {}
+    later: dict[str, dict[int, tuple[str, tuple[str, ...], str]]] = {}  # block -> piece -> its optimised build
     with jit.Compiler() as cc:
         for b in bar(todo, desc="building the robot blocks' derivatives", unit="block"):
             fns[b.name] = b.derivative_functions()
-            futures[b.name] = []
-            for f in fns[b.name].values():
+            futures[b.name], later[b.name] = [], {}
+            for i, f in enumerate(fns[b.name].values()):
                 gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
                 gen.add(f)
-                futures[b.name].append(cc.submit(f.name(), gen.dump(), jit.flags_for(f, b.hot)))
+                source, flags = gen.dump(), jit.flags_for(f, b.hot)
+                final = jit.library_path(source, flags).name
+                if upgrade.quick_first(f.n_instructions(), flags) and jit.cached_library(final) is None:
+                    later[b.name][i] = (source, flags, final)
+                    flags = jit.ONCE_FLAGS
+                futures[b.name].append(cc.submit(f.name(), source, flags))
     for b in todo:
         built: list[Path | None] = [f.result() for f in futures[b.name]]
         libs = [lib for lib in built if lib is not None]
@@ -250,10 +257,13 @@ def _compile(todo: list[RobotBlock]) -> None:
         index = _index_file(b)
         tmp = index.with_name(f".{index.name}.{os.getpid()}")
         b.instructions = {k: f.n_instructions() for k, f in fns[b.name].items()}
-        tmp.write_text(json.dumps({"block": b.name, "libraries": [p.name for p in libs],
-                                   "instructions": b.instructions}))
+        entry = {"block": b.name, "libraries": [p.name for p in libs], "instructions": b.instructions}
+        tmp.write_text(json.dumps(entry))
         os.replace(tmp, index)
         b.functions = _load(b, [str(p) for p in libs])
+        if later[b.name]:
+            final = [later[b.name][i][2] if i in later[b.name] else lib.name for i, lib in enumerate(libs)]
+            upgrade.start(index, {**entry, "libraries": final}, list(later[b.name].values()))
 
 
 def stack_tangents(G: np.ndarray) -> np.ndarray:

@@ -159,25 +159,10 @@ class Compiler:
         return fut
 
     def _build(self, label: str, source: str, flags: tuple[str, ...], lib: Path) -> Path | None:
-        cache, seen = cache_dir(), interrupts_seen()
+        seen = interrupts_seen()
         try:
-            cache.mkdir(parents=True, exist_ok=True)
-            # one process compiles a library others need at once; the others wait and find it
-            lock = exclusive_lock(lib.with_name(lib.name + ".lock"))
-            with lock, tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
-                if cached_library(lib.name) is not None:  # another process compiled it while we waited
-                    return lib
-                c_file, so_file = Path(tmp) / f"{lib.stem}.c", Path(tmp) / lib.name
-                c_file.write_text(source)
-                assert self.cc is not None  # submit() compiles nothing without one
-                subprocess.run([self.cc, *flags, "-shared", "-fPIC", "-o", str(so_file), str(c_file), "-lm"],
-                               check=True, capture_output=True, text=True)
-                # the checksum first, the library last, each renamed into place: a reader sees no
-                # library, or a whole one whose checksum is there
-                tmp_sum = Path(tmp) / "sha256"
-                tmp_sum.write_text(_digest(so_file))
-                os.replace(tmp_sum, _checksum_file(lib))
-                os.replace(so_file, lib)
+            assert self.cc is not None  # submit() compiles nothing without one
+            return build_library(self.cc, source, flags, lib)
         except (OSError, subprocess.CalledProcessError) as exc:
             if interrupts_seen() > seen or getattr(exc, "returncode", 0) < 0:  # Ctrl-C reached the compiler too
                 return None
@@ -186,4 +171,25 @@ class Compiler:
             return None
         finally:
             self.bar.update(1)
-        return lib
+
+
+def build_library(cc: str, source: str, flags: tuple[str, ...], lib: Path) -> Path:
+    """Compile ``source`` with ``flags`` into the cached library ``lib`` (module doc: a lock beside it,
+    written atomically with its checksum); an OSError or CalledProcessError if it cannot be."""
+    cache = lib.parent
+    cache.mkdir(parents=True, exist_ok=True)
+    # one process compiles a library others need at once; the others wait and find it
+    with exclusive_lock(lib.with_name(lib.name + ".lock")), tempfile.TemporaryDirectory(dir=cache, prefix=".build-") as tmp:
+        if cached_library(lib.name) is not None:  # another process compiled it while we waited
+            return lib
+        c_file, so_file = Path(tmp) / f"{lib.stem}.c", Path(tmp) / lib.name
+        c_file.write_text(source)
+        subprocess.run([cc, *flags, "-shared", "-fPIC", "-o", str(so_file), str(c_file), "-lm"],
+                       check=True, capture_output=True, text=True)
+        # the checksum first, the library last, each renamed into place: a reader sees no
+        # library, or a whole one whose checksum is there
+        tmp_sum = Path(tmp) / "sha256"
+        tmp_sum.write_text(_digest(so_file))
+        os.replace(tmp_sum, _checksum_file(lib))
+        os.replace(so_file, lib)
+    return lib
