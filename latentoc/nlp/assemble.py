@@ -93,17 +93,18 @@ class _Plan:
         ev = self.ev = fam.evaluator
         self.fam = fam
         n_in, K = ev.n_in, fam.K
-        S = sp.csr_matrix(fam.S)
-        cols = []
-        for k in range(K):
-            cols.append(np.unique(S[k * n_in:(k + 1) * n_in].indices))
-        n_c = max((len(c) for c in cols), default=0)
+        # node k's rows of S, k * n_in ... (k + 1) * n_in - 1, on the columns they touch (ascending)
+        S = sp.csr_matrix(fam.S).tocoo()
+        node = S.row.astype(np.int64) // n_in
+        keys = np.unique(node * S.shape[1] + S.col)  # (node, column) pairs, sorted
+        key_node = keys // S.shape[1]
+        counts = np.bincount(key_node, minlength=K)
+        n_c = int(counts.max(initial=0))
+        slot = np.arange(len(keys)) - np.concatenate([[0], np.cumsum(counts)[:-1]])[key_node]
         self.cols = np.full((K, n_c), -1, dtype=np.int64)
+        self.cols[key_node, slot] = keys % S.shape[1]
         self.Sd = np.zeros((K, n_in, n_c))
-        for k, c in enumerate(cols):
-            self.cols[k, :len(c)] = c
-            if len(c):
-                self.Sd[k, :, :len(c)] = S[k * n_in:(k + 1) * n_in][:, c].toarray()
+        np.add.at(self.Sd, (node, S.row % n_in, slot[np.searchsorted(keys, node * S.shape[1] + S.col)]), S.data)
         self.n_c = n_c
         Cg = sp.coo_matrix(fam.Cg) if fam.Cg is not None else None
         self.C_rows = Cg.row if Cg is not None else np.zeros(0, np.int64)
