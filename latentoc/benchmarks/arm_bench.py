@@ -31,7 +31,7 @@ from latentoc.min_torque.nlp import ipopt_options, joint_range_nlp, latent_nlp
 from latentoc.min_torque.settings import MinTorqueSettings
 from latentoc.min_torque.training import problem_gpdm, training_frames
 from latentoc.motions import TRAINING_MOTIONS
-from latentoc.nlp import ipopt
+from latentoc.nlp import ipopt, upgrade
 from latentoc.nlp.jit import threads
 from latentoc.problem_files import load_problem
 from latentoc.progress import set_quiet
@@ -131,6 +131,9 @@ def main(argv: list[str] | None = None) -> int:
           f"callbacks: ms per call x calls; rest = solve - callbacks (Ipopt, CasADi)")
     print(f"{'method':12s} {'param':>5s} {'build s':>7s} {'solve s':>7s} {'cpu s':>7s} {'iter':>5s} {'cost':>14s}  "
           + " ".join(f"{k:>10s}" for k, _ in CALLBACKS) + f" {'rest s':>6s}  status")
+    for k in (args.tubes or ["5x"])[:1]:  # compiles what the cache lacks, then waits for its optimised libraries
+        latent_nlp(gp, sym, settings, resolve_tube(k, gp.tube_size()), t_train=t_train)
+    upgrade.wait()
     for tube in args.tubes:
         t0 = time.perf_counter()
         nlp = latent_nlp(gp, sym, settings, resolve_tube(tube, gp.tube_size()), t_train=t_train)
