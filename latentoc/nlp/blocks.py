@@ -34,6 +34,7 @@ import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -257,13 +258,13 @@ def _compile(todo: list[RobotBlock]) -> None:
         index = _index_file(b)
         tmp = index.with_name(f".{index.name}.{os.getpid()}")
         b.instructions = {k: f.n_instructions() for k, f in fns[b.name].items()}
-        entry = {"block": b.name, "libraries": [p.name for p in libs], "instructions": b.instructions}
+        entry: dict[str, Any] = {"block": b.name, "libraries": [p.name for p in libs], "instructions": b.instructions}
         tmp.write_text(json.dumps(entry))
         os.replace(tmp, index)
         b.functions = _load(b, [str(p) for p in libs])
         if later[b.name]:
-            final = [later[b.name][i][2] if i in later[b.name] else lib.name for i, lib in enumerate(libs)]
-            upgrade.start(index, {**entry, "libraries": final}, list(later[b.name].values()))
+            optimised = [later[b.name][i][2] if i in later[b.name] else lib.name for i, lib in enumerate(libs)]
+            upgrade.start(index, {**entry, "libraries": optimised}, list(later[b.name].values()))
 
 
 def stack_tangents(G: np.ndarray) -> np.ndarray:

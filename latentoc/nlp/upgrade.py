@@ -36,10 +36,10 @@ def start(index: Path, entry: dict, jobs: list[tuple[str, tuple[str, ...], str]]
     write ``entry`` (the index naming the optimised libraries) to ``index``."""
     cache = cache_dir()
     folder = Path(tempfile.mkdtemp(dir=cache, prefix=".upgrade-"))
-    plan = {"index": index.name, "entry": entry, "jobs": []}
-    for i, (source, flags, lib) in enumerate(jobs):
+    for i, (source, _, _) in enumerate(jobs):
         (folder / f"{i}.c").write_text(source)
-        plan["jobs"].append({"source": f"{i}.c", "flags": list(flags), "library": lib})
+    plan = {"index": index.name, "entry": entry,
+            "jobs": [{"source": f"{i}.c", "flags": list(flags), "library": lib} for i, (_, flags, lib) in enumerate(jobs)]}
     (folder / "plan.json").write_text(json.dumps(plan))
     env = {**os.environ, "LATENTOC_CACHE": str(cache)}
     _started.append(subprocess.Popen([sys.executable, "-m", "latentoc.nlp.upgrade", str(folder)], env=env,
