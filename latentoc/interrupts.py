@@ -60,13 +60,20 @@ def _handled(handler: Callable[[int, FrameType | None], None], over: tuple[Any, 
         yield
     except Exception as exc:
         if _seen > start:
-            raise KeyboardInterrupt from exc
+            raise _interrupt() from exc
         raise
     finally:
         if install:
             signal.signal(signal.SIGINT, previous)
     if _seen > start:
-        raise KeyboardInterrupt
+        raise _interrupt()
+
+
+def _interrupt() -> KeyboardInterrupt:
+    """The KeyboardInterrupt a counted SIGINT becomes: the command line raises no second one."""
+    global _armed
+    _armed = False
+    return KeyboardInterrupt()
 
 
 def watching() -> AbstractContextManager[None]:
@@ -122,16 +129,12 @@ def _unraisable(hook: Callable[..., object]) -> Callable[..., object]:
             import _thread
 
             _thread.interrupt_main()
-        elif not _interrupted_since(_baseline):
+        elif _seen <= _baseline:  # an error of its own, not one a SIGINT caused
             hook(args)
     return quiet
 
 
 _baseline = 0  # SIGINTs seen when the current command line started
-
-
-def _interrupted_since(count: int) -> bool:
-    return _seen > count
 
 
 class CommandLine:
