@@ -8,7 +8,8 @@ memory and Eq. 16, with the machine it ran on.
 * synthetic N = 1000, D = 37: <= 2 min and <= 2 GB peak.
 
 ``--scaling``: time and peak memory for N = 350, 1000, 2000 (D = 37), docs/gpdm.md's table.
-Run: ``python -m latentoc bench gpdm [--scaling] [--quick]``.
+``--split``: N = 350's learning time level by level (evaluations, Hessians, eigendecompositions).
+Run: ``python -m latentoc bench gpdm [--scaling | --split] [--quick]``.
 """
 
 from __future__ import annotations
@@ -82,6 +83,41 @@ def _child(case: str) -> dict:
     return out
 
 
+def _split(case: str) -> list[dict]:
+    """One learning run timed level by level (coarse to fine): L and its gradient, the Hessian's
+    assembly, its eigendecomposition and the rest, from timers put around the Newton method's calls
+    in this (child) process."""
+    import latentoc.gpdm.learning as learning
+    from latentoc.gpdm import GPDMSettings
+    from latentoc.progress import set_quiet
+
+    set_quiet(True)
+    levels: list[dict] = []
+    newton, eigh = learning.minimize_newton, np.linalg.eigh
+
+    def timer(fn, key):  # type: ignore[no-untyped-def]
+        def call(*a, **k):  # type: ignore[no-untyped-def]
+            t0 = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                if levels:
+                    levels[-1][key] += time.perf_counter() - t0
+        return call
+
+    def level(evaluate, hessian, z0, *a, **k):  # type: ignore[no-untyped-def]
+        levels.append({"variables": int(np.size(z0)), "evaluate_s": 0.0, "hessian_s": 0.0, "eigh_s": 0.0})
+        t0 = time.perf_counter()
+        r = newton(timer(evaluate, "evaluate_s"), timer(hessian, "hessian_s"), z0, *a, **k)
+        levels[-1].update(wall_s=time.perf_counter() - t0, iterations=r.steps, evaluations=r.evaluations)
+        return r
+
+    learning.minimize_newton, np.linalg.eigh = level, timer(eigh, "eigh_s")  # type: ignore[assignment]
+    N, D = (int(x) for x in case.split("x"))
+    learning.learn_gpdm(synthetic_motion(N, D), GPDMSettings())
+    return sorted(levels, key=lambda lv: lv["variables"])
+
+
 def _against_shipped(Y: np.ndarray, m) -> dict:  # type: ignore[no-untyped-def]
     """Eq. 16 and the latent points (after the best rotation) against the shipped model of the same data."""
     from latentoc.gpdm import GPDM
@@ -148,10 +184,21 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="gpdm_bench", description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--scaling", action="store_true", help="time and memory for N = 350, 1000, 2000 (D = 37)")
     p.add_argument("--quick", action="store_true", help="leave out N = 1000")
+    p.add_argument("--split", action="store_true", help="where N = 350's learning time goes, level by level")
     p.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.child is not None:
-        print(json.dumps(_child(args.child)), flush=True)
+        out = _split(args.child[6:]) if args.child.startswith("split:") else _child(args.child)
+        print(json.dumps(out), flush=True)
+        return 0
+    if args.split:
+        _, _, out = _run([sys.executable, "-m", "latentoc.benchmarks.gpdm_bench", "--child", "split:350x37"])
+        print(f"N = 350, D = 37, by level (machine: {machine()})")
+        for lv in json.loads(out.strip().splitlines()[-1]):
+            rest = lv["wall_s"] - lv["evaluate_s"] - lv["hessian_s"] - lv["eigh_s"]
+            print(f"  {lv['variables']:5d} variables: {lv['wall_s']:.2f} s, {lv['iterations']} iterations; "
+                  f"{lv['evaluations']} evaluations {lv['evaluate_s']:.2f} s, Hessians {lv['hessian_s']:.2f} s, "
+                  f"eigendecompositions {lv['eigh_s']:.2f} s, the rest {rest:.2f} s")
         return 0
     print("GPDM learning benchmark (d = 3, balanced, converged to the Newton decrement <= 1e-10 |L|, 1 BLAS thread)")
     print(f"machine: {machine()}")
