@@ -87,7 +87,7 @@ def deferred() -> AbstractContextManager[None]:
     """Run the block with SIGINT counted but not raised (:func:`interrupts_seen` grows), so that no
     KeyboardInterrupt starts inside C code that calls back into Python (Ipopt's callbacks check the
     count and stop the solver instead); KeyboardInterrupt at the block's end if one arrived. Only in
-    the main thread, and only over Python's default handler or :func:`watching`'s."""
+    the main thread, and only over Python's default handler, :func:`watching`'s or the command line's."""
     return _handled(_count, (signal.default_int_handler, _record, _once))
 
 
