@@ -173,9 +173,11 @@ def summary_lines(report: Mapping[str, Any]) -> list[str]:
                      f"base off the plan by {s['base_tracking_rms']:.3f} m rms, {s['base_tracking_max']:.3f} m at most")
     state = (("DIVERGED" if s["diverged"] else "FELL") + f" at {s['fall_time']:.3f} s") if s["fell"] else "stayed upright"
     excess = s.get("torque_excess")
-    torques = ("" if excess is None else "; torques within their limits" if excess["max"] <= 0 else
+    torques = ("" if excess is None else "; torques within their limits" if excess["max"] <= 1e-9 else
                f"; torques beyond the limits by up to {excess['max']:.1f} N m ({excess['joint']}, "
                f"{100 * excess['fraction']:.0f} % of samples)")
+    if "clamped_fraction" in s and excess is not None:
+        torques += f", clamped to them on {100 * s['clamped_fraction']:.1f} % of samples"
     lines.append(f"{state}; contact slip up to {1e3 * s['max_contact_slip']:.1f} mm{torques}")
     if "initial_contact_height_min" in s and max(-s["initial_contact_height_min"], s["initial_contact_height_max"]) > 1e-3:
         lines.append(f"note: the plan's contact points start {1e3 * s['initial_contact_height_min']:+.1f} to "

@@ -3,7 +3,9 @@
 The model is :func:`.mjcf.mjcf_from_model`'s; it starts at the plan's first state ``q[0], v[0]``.
 Every joint gets ``tau_ff(t) + kp (q_plan - q) + kd (v_plan - v)``: ``tau_ff`` held per sample of
 the plan (zero-order hold), the plan interpolated linearly in time. MuJoCo's actuators compute the
-PD (``ctrl = tau_ff + kp q_plan + kd v_plan``, bias ``-kp q - kd' v``), so it acts within the step.
+PD (``ctrl = tau_ff + kp q_plan + kd v_plan``, bias ``-kp q - kd' v``), so it acts within the step,
+and clamp its force to the plan's torque limits (``tau_min``, ``tau_max``) as a robot's actuators
+would; the summary's ``clamped_fraction`` is the share of samples at which one did.
 
 Gains (:func:`gains`): one ``kp`` (N m/rad) for every joint and, by default, each joint's
 ``kd = 2 sqrt(kp I)`` (critical damping), ``I`` the joint's diagonal of the joint-space inertia
@@ -143,6 +145,9 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
     m.actuator_biasprm[:] = 0.0
     m.actuator_biasprm[:, 1] = -g.kp
     m.actuator_biasprm[:, 2] = -(Kd + timestep * g.kp) if implicit else -Kd
+    bound = _limits(arrays, col)
+    m.actuator_forcelimited[:] = np.isfinite(bound[0])  # an actuator gives no more than its joint's limit
+    m.actuator_forcerange[:] = np.where(np.isfinite(bound), bound, 0.0).T
     spheres = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, f"contact{k}_{name}") for k, (name, _) in enumerate(contacts)]
     d.qpos[:], d.qvel[:] = qpos_plan[0], qvel_plan[0]
     mujoco.mj_forward(m, d)
@@ -150,6 +155,7 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
     n, nc = len(t), len(spheres)
     qpos, qvel = np.zeros((n, m.nq)), np.zeros((n, m.nv))
     applied, forces, points = np.zeros((n, m.nu)), np.zeros((n, nc, 3)), np.zeros((n, nc, 3))
+    clamped = np.zeros(n, bool)  # samples where an actuator met its limit
     done = n
     with bar(total=n, desc=desc, unit="sample") as progress:
         for i in range(n):
@@ -158,7 +164,9 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
             if i == n - 1:
                 mujoco.mj_forward(m, d)  # the contacts of the final state
                 forces[i] = _sphere_forces(m, d, spheres)
-                applied[i] = F[i] + g.kp * (Qj[i] - d.qpos[7:]) + Kd * (Vj[i] - d.qvel[6:])
+                wanted = F[i] + g.kp * (Qj[i] - d.qpos[7:]) + Kd * (Vj[i] - d.qvel[6:])
+                applied[i] = np.clip(wanted, bound[0], bound[1])
+                clamped[i] = bool(np.any(applied[i] != wanted))
             for s in range(sub if i < n - 1 else 0):
                 w = (s + 1.0) / sub if implicit else (s + 0.5) / sub  # the targets at the step's end (middle)
                 d.ctrl[:] = F[i] + g.kp * ((1 - w) * Qj[i] + w * Qj[i + 1]) + Kd * ((1 - w) * Vj[i] + w * Vj[i + 1])
@@ -167,7 +175,10 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
                 if s == 0:
                     forces[i] = _sphere_forces(m, d, spheres)  # this step's contacts: the state at t[i]
                 qj, vj = (d.qpos[7:], d.qvel[6:]) if implicit else ((before[0] + d.qpos[7:]) / 2, (before[1] + d.qvel[6:]) / 2)
-                applied[i] += (d.ctrl - g.kp * qj - Kd * vj) / sub
+                wanted = d.ctrl - g.kp * qj - Kd * vj
+                force = np.clip(wanted, bound[0], bound[1])  # as MuJoCo clamps it (actuator forcerange)
+                applied[i] += force / sub
+                clamped[i] |= bool(np.any(force != wanted))
             progress.update(1)
             if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0:
                 done = i + 1  # MuJoCo reset the state: keep what came before
@@ -177,7 +188,18 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
     tau[:, col] = applied[:done]
     sim = Simulation(t[:done], q, v, tau, forces[:done], points[:done], [name for name, _ in contacts], g, mjcf=xml)
     sim.summary = summarize(model, arrays, sim, contacts, distance_point, diverged=done < n)
+    sim.summary["clamped_fraction"] = float(np.mean(clamped[:done]))
     return sim
+
+
+def _limits(arrays: Mapping[str, Any], col: np.ndarray) -> np.ndarray:
+    """The plan's torque limits per actuator (2 x actuators: columns ``col`` of tau_min, tau_max);
+    -inf, inf where it has none or where they are a point (the joints a symmetric plan leaves unloaded)."""
+    if "tau_min" not in arrays or "tau_max" not in arrays:
+        return np.vstack([np.full(len(col), -np.inf), np.full(len(col), np.inf)])
+    lo, hi = (np.asarray(arrays[k], dtype=float)[col] for k in ("tau_min", "tau_max"))
+    point = hi - lo <= 1e-6
+    return np.vstack([np.where(point, -np.inf, lo), np.where(point, np.inf, hi)])
 
 
 def _sphere_forces(m: mujoco.MjModel, d: mujoco.MjData, spheres: list[int]) -> np.ndarray:
