@@ -57,6 +57,9 @@ TRAJECTORY_KEYS: dict[str, str] = {
     "x": "latent path (n x d)",
     "P": "spline control points: latent (m x d), or joint (m x nq) for the joint-range method",
     "sigma2": "GPDM variance along x (n), Eq. 19",
+    "leg_residual": "the broad jump's residual on the legs' sagittal joints beside x, rad (n x r)",
+    "leg_residual_control_points": "its spline's control points (m x r)",
+    "leg_residual_joints": "the learned coordinates it is added to (r)",
     # the arm (latent-min-torque)
     "x_initial": "latent path of the training fit (n x d)",
     "P_initial": "control points of the training fit",

@@ -80,12 +80,14 @@ class BSpline:
         """The distinct knots: the curve is a polynomial between consecutive breakpoints."""
         return np.unique(self.knots)
 
-    def basis(self, t: np.ndarray, derivative: int = 0) -> np.ndarray:
-        """Matrix ``B`` (len(t) x m) with ``B[k, i] = d^r B_i / dt^r (t_k)`` (Eq. 23-25)."""
+    def basis(self, t: np.ndarray, derivative: int = 0, left: bool | np.ndarray = False) -> np.ndarray:
+        """Matrix ``B`` (len(t) x m) with ``B[k, i] = d^r B_i / dt^r (t_k)`` (Eq. 23-25); where ``left``,
+        the limit from the left (at a repeated knot the derivatives there may jump)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if np.any(t < -1e-12) or np.any(t > self.duration + 1e-12):
             raise SplineInputError(f"spline times must lie in [0, {self.duration}]")
         t = np.clip(t, 0.0, self.duration)
+        t = np.where(np.asarray(left, bool) & (t > 0), np.nextafter(t, -np.inf), t)
         eye = np.eye(self.n_control)
         spline = _ScipyBSpline(self.knots, eye, self.degree, extrapolate=False)
         if derivative:

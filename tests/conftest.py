@@ -16,10 +16,11 @@ def sigint_default():
 
 @pytest.fixture(scope="session")
 def jump_setup():
-    """The broad jump's default set-up (training jump, GPDM, phases, limits), built once."""
-    from latentoc.jump.problem import setup
+    """The packaged broad jump's set-up (planted training jump, GPDM, phases, limits), built once."""
+    from latentoc.jump.problem import problem_setup
+    from latentoc.problem_files import load_problem
 
-    return setup()
+    return problem_setup(load_problem("broad-jump"))
 
 
 @pytest.fixture(scope="session")
@@ -35,7 +36,7 @@ def jump_parts(jump_setup):
 
 @pytest.fixture(scope="session")
 def small_jump(jump_parts):
-    """A broad-jump NLP with few nodes and every row family (phase 2: distance; sticking contacts; every node row,
+    """A broad-jump NLP with few nodes and every row family (phase 2: distance; every node row,
     contact samples every 50 ms and flight samples every 50 ms with every torque row, the tube) and
     its training start (:func:`latentoc.jump.start.initial_point`)."""
     import numpy as np
@@ -47,15 +48,14 @@ def small_jump(jump_parts):
 
     p = jump_parts
     js = p.js
-    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05, sticking=True)
+    settings = JumpSettings(n_stance=6, n_flight=6, n_land=6, sample_spacing=0.05)
     ph, nk = js.phases, p.robot.unmirrored.size
     tc = contact_sample_grid(settings, ph)
     tf = np.round(np.arange(ph.takeoff + 0.02, ph.touchdown - 0.01, 0.05), 3)
     selection = Selection(np.ones((12, nk)), np.ones((12, 8)), tc, np.ones((len(tc), nk)), np.ones((len(tc), 8)),
                           tf, np.ones((len(tf), nk)), tube_times(settings, ph, p.layer))
     nlp = build_nlp(p.robot, p.layer, p.blocks, ph, settings, js.init["P"], "distance", selection)
-    x0 = initial_point(p.robot, p.layer, nlp, js.init["P"], js.init["t"], js.init["base"], js.init["x_L"],
-                       js.phases.takeoff, js.phases.touchdown)
+    x0 = initial_point(p.robot, p.layer, nlp, ph, js.init["P"], js.init["x_L"])
     return SimpleNamespace(**vars(p), settings=settings, nlp=nlp, x0=x0)
 
 

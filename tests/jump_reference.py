@@ -16,10 +16,11 @@ POINT_FRAMES = ("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")  # heel (on the 
 MIRROR = np.array([1.0, -1.0, 1.0])
 
 
-def joint_motion(layer, spline, P, t):
-    """y, yd, ydd (each K x n) of the GP layer along the latent spline with control points P."""
+def joint_motion(layer, spline, P, t, left=False):
+    """y, yd, ydd (each K x n) of the GP layer along the latent spline with control points P (where
+    ``left``, the spline's limits from the left)."""
     t = np.atleast_1d(np.asarray(t, float))
-    m = layer.motion(np.hstack([spline.evaluate(P, t, k) for k in range(3)]))
+    m = layer.motion(np.hstack([spline.basis(t, k, left) @ P for k in range(3)]))
     return m.y, m.yd, m.ydd
 
 

@@ -35,17 +35,16 @@ def full_jump(jump_parts):
     selection = Selection(np.ones((12, nk)), np.ones((12, 8)), tc, np.ones((len(tc), nk)), np.ones((len(tc), 8)),
                           tf, np.ones((len(tf), nk)), np.zeros(0))
     nlp = build_nlp(robot, path.layer, blocks, ph, settings, path.P, "distance", selection, path.P_range)
-    x0 = initial_point(robot, path.layer, nlp, path.P, js.init["t"], js.init["base"], js.init["x_L"], ph.takeoff,
-                       ph.touchdown)
+    x0 = initial_point(robot, path.layer, nlp, ph, path.P, js.init["x_L"])
     return SimpleNamespace(p=p, path=path, blocks=blocks, settings=settings, nlp=nlp, x0=x0)
 
 
 def _directions(nlp, n_random, seed):
-    """Random directions and the first coordinate of the path's, the bases' and the forces' blocks."""
+    """Random directions and the first coordinate of the path's, the landing point's and the forces' blocks."""
     rng = np.random.default_rng(seed)
     var = nlp.variables
     return [rng.standard_normal(var.n) for _ in range(n_random)] + \
-        [np.eye(var.n)[var.slices[name].start] for name in ("P", "base_stance", "base_land", "lam", "L_to")]
+        [np.eye(var.n)[var.slices[name].start] for name in ("P", "x_L", "lam", "L_to")]
 
 
 @pytest.mark.slow  # ~1 min with LATENTOC_JIT=0: the 37-joint blocks' SX derivatives are built here
@@ -111,7 +110,7 @@ def test_full_space_start_is_the_training_joints_fit(full_jump):
     js = p.js
     P = jn.control_points(x0)
     np.testing.assert_array_equal(P, js.init["P_joint"])
-    spline, tr = jn.splines[0], js.training
+    spline, tr = jn.spline, js.training
     B = spline.basis(tr.t)
     resid = B @ P - tr.Y
     np.testing.assert_allclose(P[[0, -1]], tr.Y[[0, -1]], atol=1e-12)  # through the end poses

@@ -125,15 +125,15 @@ def test_point_and_multipliers_follow_their_rows_into_an_nlp_with_more_samples(s
 
 def test_row_and_variable_bounds(small_jump):
     """Torque rows bounded by the training limits (held TORQUE_BACKOFF inside them) over their range
-    (per joint, at every node and sample), the contact schedule in the heel and ball bounds (a loaded point on the ground within
-    the contact tolerance, an unloaded ball above the soft-sole depth), the centre of pressure by
-    the loaded support, the feet, polygons, flight clearance and tube one-sided as the module doc
-    says; edge weights >= 0 and zero on the unloaded points."""
+    (per joint, at every node and sample), the contact schedule in the heights' rows (an unloaded
+    point above the ground), the centre of pressure by the loaded support, the transitions as
+    equalities, polygons, flight clearance and tube one-sided as the module doc says; edge
+    weights >= 0 and zero on the unloaded points."""
     from latentoc.jump.contact import POINTS
     from latentoc.jump.nlp import TORQUE_BACKOFF, TUBE_BACKOFF
 
     sj = small_jump
-    jn, robot, s, ph = sj.nlp, sj.robot, sj.settings, sj.js.phases
+    jn, robot, ph = sj.nlp, sj.robot, sj.js.phases
     names, lbg, ubg, comps = jn.row_names, jn.lbg, jn.ubg, jn.row_components
     lo, hi, act, scale = robot.limits.tau_min, robot.limits.tau_max, robot.active, robot.torque_scale
     sel = names == "torque"
@@ -141,39 +141,27 @@ def test_row_and_variable_bounds(small_jump):
     np.testing.assert_allclose(lbg[sel] * scale[comps[sel]], lo[act][comps[sel]] + TORQUE_BACKOFF, rtol=1e-12)
     np.testing.assert_allclose(ubg[sel] * scale[comps[sel]], hi[act][comps[sel]] - TORQUE_BACKOFF, rtol=1e-12)
     t = jn.row_times
-    n_held = 12 + len(jn.selection.contact)  # the feet held at the contact nodes and samples
-    for part in ("heel_height", "ball_height"):
-        assert (names == part).sum() == n_held
-    # the pad's height while the ball is off the ground (the toes flat), bounded as a loaded point;
-    # a held point's y within the contact tolerance
-    pad = names == "pad_height"
-    assert pad.any() and not ph.loaded("ball", t[pad]).any() and ph.loaded("pad", t[pad]).all()
-    np.testing.assert_array_equal(lbg[pad], -s.contact_tolerance)
-    np.testing.assert_array_equal(ubg[pad], s.contact_tolerance)
-    side = names == "point_y"
-    assert (side & (comps == 2)).sum() == n_held  # the toe tip's at every node and sample
-    np.testing.assert_array_equal(lbg[side], -s.contact_tolerance)
-    np.testing.assert_array_equal(ubg[side], s.contact_tolerance)
-    heel, ball = ph.loaded("heel", t[names == "heel_height"]), ph.loaded("ball", t[names == "ball_height"])
-    ct = s.contact_tolerance
-    np.testing.assert_array_equal(lbg[names == "heel_height"], -ct)
-    np.testing.assert_array_equal(ubg[names == "heel_height"], np.where(heel, ct, np.inf))
-    np.testing.assert_array_equal(lbg[names == "ball_height"], np.where(ball, -ct, -s.ball_tolerance))
-    np.testing.assert_array_equal(ubg[names == "ball_height"], np.where(ball, ct, np.inf))
-    assert not heel.all() and not ball.all() and heel.any() and ball.any()
+    # an unloaded point's height above its standing one, at every contact node and sample (the
+    # loaded ones hold theirs by the closure)
+    h = names == "height"
+    pts = np.array(POINTS)[comps[h]]
+    assert h.any() and not any(ph.loaded(p, np.array([tk]))[0] for p, tk in zip(pts, t[h]))
+    assert {"heel", "ball"} <= set(pts)
+    np.testing.assert_array_equal(lbg[h], 0.0)
+    np.testing.assert_array_equal(ubg[h], np.inf)
     # one centre-of-pressure row for the rearmost loaded point at every node and contact sample
     back = names[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
     tb = t[np.isin(names, ["cop_heel", "cop_ball", "cop_pad"])]
     want = np.where(ph.loaded("heel", tb), "cop_heel", np.where(ph.loaded("ball", tb), "cop_ball", "cop_pad"))
     np.testing.assert_array_equal(back, want)
     assert len(back) == (names == "cop_front").sum() == 12 + len(jn.selection.contact)
-    one_sided = {"toe_position": (-s.foot_tolerance, s.foot_tolerance), "dynamics": (0, 0), "takeoff": (0, 0),
-                 "impact": (0, 0), "touchdown_position": (0, 0), "pitch_integration": (0, 0),
+    one_sided = {"dynamics": (0, 0), "takeoff": (0, 0), "closure_gap": (0, 0), "hinge_switch": (0, 0),
+                 "touchdown_velocity": (0, 0), "touchdown_position": (0, 0), "pitch_integration": (0, 0),
                  "flight_base": (0, 0), "pitch_rate": (0, 0),
                  "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "flight_clearance": (0, np.inf),
                  "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "cop_front": (0, np.inf), "cop_heel": (0, np.inf), "cop_ball": (0, np.inf),
                  "cop_pad": (0, np.inf)}
-    assert set(one_sided) | {"torque", "heel_height", "ball_height", "pad_height", "point_y"} == set(names)
+    assert set(one_sided) | {"torque", "height"} == set(names)
     for part, (a, b) in one_sided.items():
         assert np.all(lbg[names == part] == a) and np.all(ubg[names == part] == b), part
     var = jn.variables
@@ -183,8 +171,7 @@ def test_row_and_variable_bounds(small_jump):
         for k, point in enumerate(POINTS):
             np.testing.assert_array_equal(ub[:, 2 * k:2 * k + 2] == 0,
                                           np.repeat(~ph.loaded(point, times)[:, None], 2, axis=1))
-    assert np.all(jn.lbx[var.index("lam_impact")] == 0)
-    bounded = np.concatenate([var.index(b).ravel() for b in ("lam", "lam_sample", "lam_impact")])
+    bounded = np.concatenate([var.index(b).ravel() for b in ("lam", "lam_sample")])
     others = np.setdiff1d(np.arange(var.n), bounded)
     assert np.all(np.isinf(jn.lbx[others])) and np.all(np.isinf(jn.ubx[others]))
 
@@ -197,8 +184,7 @@ def test_objectives(small_jump):
 
     sj = small_jump
     parts = sj.nlp.variables.unpack(sj.x0)
-    reg = FORCE_REGULARISATION * (np.sum(parts["lam"] ** 2) + np.sum(parts["lam_impact"] ** 2)
-                                  + np.sum(parts["lam_sample"] ** 2))
+    reg = FORCE_REGULARISATION * (np.sum(parts["lam"] ** 2) + np.sum(parts["lam_sample"] ** 2))
     assert sj.nlp.nlp.objective(sj.x0) == pytest.approx(-parts["x_L"][0] + reg, rel=1e-12)
     feas = build_nlp(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init["P"], "feasibility",
                      sj.nlp.selection)

@@ -144,10 +144,11 @@ def test_packaged_options_set_the_jump_settings():
 
 
 @pytest.mark.parametrize("key", ["n_flihgt", "time_scale", "base_model", "contact_model", "knot_nodes",
-                                 "push_off_nodes"])
+                                 "push_off_nodes", "n_base_stance", "foot_tolerance", "contact_tolerance", "sticking"])
 def test_unknown_or_removed_option_is_refused_by_name(key):
     """A typo in [options], or an option of the removed toe-pinned base, contact models, knot or
-    push-off nodes and free time scale, is an error naming the key, before any set-up or solve."""
+    push-off nodes, free time scale, base splines and placement tolerances, is an error naming the
+    key, before any set-up or solve."""
     _refused_by_name(key, **{key: 1})
 
 
@@ -182,7 +183,7 @@ def test_training_stride_learns_every_kth_frame(training, stride, n_points):
     assert np.sqrt(np.mean((gp.mean(gp.X) - Y) ** 2)) < 0.03 * np.ptp(Y)
     tube = gp.tube_size()
     assert all(np.max(gp.variance(T)) <= tube for T in gp.latent_trajectories())
-    assert js.init["P"].shape == (21, 3) and np.all(np.isfinite(js.init["P"]))
+    assert js.init["P"].shape == (27, 3) and np.all(np.isfinite(js.init["P"]))
 
 
 def test_plant_training_learns_and_limits_the_planted_jump():

@@ -1,25 +1,21 @@
 """The training start (latentoc.jump.start.initial_point, balanced_forces) and the smoothed
-initial latent path (latentoc.jump.problem.initial_latent_path)."""
+initial latent path (latentoc.jump.path.initial_latent_path)."""
 import numpy as np
 import pinocchio as pin
 
-from jump_reference import SAGITTAL, full_state, generalized_force, joint_motion, point_forces
+from jump_reference import SAGITTAL, generalized_force, point_forces
 from latentoc.jump.start import balanced_forces
 
 
 def _node_base_rows(sj, parts, t):
     """The sagittal base rows at contact time t as c - A lam (body weights): c from numeric
     rnea, A the generalized force of a unit weight on each pyramid edge."""
-    js, robot, jn = sj.js, sj.robot, sj.nlp
+    from test_jump_rows import state_at
+
+    js, robot = sj.js, sj.robot
     model = js.model
     data = model.createData()
-    _, sps, spl = jn.splines
-    if t >= js.phases.touchdown - 1e-12:
-        b = [spl.evaluate(parts["base_land"], np.array([t - js.phases.touchdown]), k)[0] for k in range(3)]
-    else:
-        b = [sps.evaluate(parts["base_stance"], np.array([t]), k)[0] for k in range(3)]
-    y, yd, ydd = (u[0] for u in joint_motion(sj.layer, jn.splines[0], jn.control_points(sj.x0), t))
-    q, v, a = full_state(js.smap, *b, y, yd, ydd)
+    q, v, a = state_at(sj, parts, t)
     W = robot.weight
     c = pin.rnea(model, data, q, v, a)[SAGITTAL] / W
     A = np.column_stack([generalized_force(model, data, q, js.geom, point_forces(e, robot.mu))[SAGITTAL]
@@ -27,27 +23,20 @@ def _node_base_rows(sj, parts, t):
     return c, A
 
 
-def test_initial_point_fits_the_training_motion(small_jump):
-    """The start's latent control points and landing point are the set-up's; its contact phases'
-    base splines are least-squares fits of the captured base (normal equations); the variables
-    are within their bounds; the touchdown impulse is the uniform guess on the loaded points."""
+def test_initial_point_takes_the_flight_from_the_closed_stance(small_jump):
+    """The start's latent control points and landing point are the set-up's; the variables are within
+    their bounds; the flight's takeoff state is the closed stance's at takeoff (the takeoff rows
+    hold but for the legs' gap to the GP mean) and its pitch the ballistic one (the pitch rows hold)."""
     sj = small_jump
-    js, jn, ph = sj.js, sj.nlp, sj.js.phases
+    js, jn = sj.js, sj.nlp
     parts = jn.variables.unpack(sj.x0)
     np.testing.assert_array_equal(jn.control_points(sj.x0), js.init["P"])
     assert parts["x_L"][0] == js.init["x_L"]
     assert np.all(sj.x0 >= jn.lbx) and np.all(sj.x0 <= jn.ubx)
-    t, base = js.init["t"], js.init["base"]
-    _, sps, spl = jn.splines
-    for coef, spline, sel, t0 in ((parts["base_stance"], sps, t <= ph.takeoff + 1e-9, 0.0),
-                                  (parts["base_land"], spl, t >= ph.touchdown - 1e-9, ph.touchdown)):
-        B = spline.basis(t[sel] - t0)
-        resid = B @ coef - base[sel]
-        np.testing.assert_allclose(B.T @ resid, 0.0, atol=1e-9)
-        assert np.abs(resid).max() < 0.05  # m, rad: the captured base, smoothed
-    at_touchdown = [ph.loaded(p, np.array([ph.touchdown]))[0] for p in ("heel", "ball", "toe", "pad")]
-    assert at_touchdown == [False, False, True, True]  # the landing is toe-first (the toes' tip and pad)
-    np.testing.assert_array_equal(parts["lam_impact"], 0.5 * np.repeat(at_touchdown, 2))
+    g = jn.nlp.constraints(sj.x0)
+    sl = jn.family_rows("takeoff")
+    np.testing.assert_allclose(g[sl][jn.row_names[sl] == "takeoff"], 0.0, atol=1e-10)
+    np.testing.assert_allclose(g[jn.family_rows("pitch_integration")], 0.0, atol=1e-10)
 
 
 def test_balanced_forces_fit_the_base_rows_with_nonnegative_loaded_edges(small_jump):
@@ -87,7 +76,7 @@ def test_balanced_forces_fit_the_base_rows_with_nonnegative_loaded_edges(small_j
 def test_initial_latent_path_keeps_the_kept_state_and_smooths_the_rest():
     """Equality-constrained smoothing: at the kept times the value and velocity equal the plain
     fit's (to solver precision), the end control points stay, and the curvature integral drops."""
-    from latentoc.jump.problem import initial_latent_path
+    from latentoc.jump.path import initial_latent_path
     from latentoc.spline import BSpline
 
     sp = BSpline(15, 1.3)

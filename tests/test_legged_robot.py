@@ -11,6 +11,7 @@ import pytest
 
 from latentoc.dynamics import SymbolicModel
 from latentoc.errors import ProblemError
+from latentoc.jump.closure import LegClosure
 from latentoc.jump.contact import foot_points, point_forces
 from latentoc.jump.legged_robot import CMU_HUMANOID, declaration, robot_model
 from latentoc.jump.problem import SCHEMA
@@ -57,7 +58,8 @@ def test_the_default_robot_is_the_cmu_humanoid_and_its_problem_file_declares_the
 def test_g1_contact_rows_from_its_declaration_against_numeric_pinocchio():
     """The G1 (one foot body, four sole points) through the same contact block as the CMU humanoid:
     base rows = (rnea - sum J^T f) / weight with the forces as external forces in numeric rnea, the
-    joint torques, the toe tip's placement and the heel height against numeric frame placements."""
+    joint torques and the sole points' heights against numeric frame placements, the sole planted
+    by the closure."""
     decl = _declared(G1_ROBOT)
     model, smap = robot_model(decl)
     assert smap.n_learned == 16  # the left leg (6), the waist (3) and the left arm (7)
@@ -66,16 +68,20 @@ def test_g1_contact_rows_from_its_declaration_against_numeric_pinocchio():
     assert geom.side_frame("r", "left_ankle_roll_link") == "right_ankle_roll_link"
     np.testing.assert_allclose(geom.footprint[2], 0.0, atol=1e-9)  # all four sole points on the ground
     mass = sum(i.mass for i in model.inertias)
-    robot = JumpRobot(SymbolicModel(model), smap, geom, urdf_torque_limits(model), 0.6, mass)
+    sym = SymbolicModel(model)
+    closure = LegClosure.of(sym, smap, geom, q0)
+    robot = JumpRobot(sym, smap, geom, urdf_torque_limits(model), 0.6, mass, closure=closure)
     blk = block(robot, 3)
     rng = np.random.default_rng(3)
-    y, yd, ydd = (rng.normal(0, s, smap.n_learned) for s in (0.2, 1.0, 5.0))
-    b, bd, bdd = np.array([0.1, 0.02, 0.1]), rng.normal(0, 0.5, 3), rng.normal(0, 2.0, 3)
+    y, yd, ydd = (smap.to_learned(q0) + rng.normal(0, 0.1, smap.n_learned), rng.normal(0, 1.0, smap.n_learned),
+                  rng.normal(0, 5.0, smap.n_learned))
     lam = rng.uniform(0, 0.2, 8)
-    x_pin = 0.05
-    F = np.array(blk.rows_sx(y, yd, ydd, np.concatenate([b, bd, bdd, [x_pin], lam]))).ravel()
-    # numeric reference: the full state, rnea with the point forces as external forces
-    q, v, a = (np.array(ca.evalf(x)).ravel() for x in robot.configuration(b, bd, bdd, y, yd, ydd))
+    shift = 0.05
+    F = np.array(blk.rows_sx(y, yd, ydd, np.concatenate([[shift, 0.0], lam]))).ravel()
+    # numeric reference: the closed legs on the planted base (latentoc.jump.closure, tested on its own),
+    # rnea with the point forces as external forces
+    yc, ydc, yddc, b, bd, bdd = (u[0] for u in closure.evaluate(y[None], yd[None], ydd[None], [0.0], [shift]))
+    q, v, a = (np.array(ca.evalf(x)).ravel() for x in robot.configuration(b, bd, bdd, yc, ydc, yddc))
     d = model.createData()
     pin.framesForwardKinematics(model, d, q)
     left = foot_points(model, d, geom).T
@@ -91,8 +97,9 @@ def test_g1_contact_rows_from_its_declaration_against_numeric_pinocchio():
     net = pin.rnea(model, d, q, v, a, fext)  # rnea - sum J^T f
     np.testing.assert_allclose(F[blk.layout["dynamics"]], net[[0, 2, 4]] / W, atol=1e-9)
     np.testing.assert_allclose(F[blk.layout["torque"]], net[6:][robot.active], atol=1e-8 * np.abs(net).max())
-    np.testing.assert_allclose(F[blk.layout["toe_position"]], [left[2, 0] - x_pin, left[2, 2]], atol=1e-12)
-    np.testing.assert_allclose(F[blk.layout["heel_height"]], left[0, 2], atol=1e-12)
+    np.testing.assert_allclose(F[blk.layout["height"]], left[:, 2], atol=1e-12)  # the planted sole: on the ground
+    np.testing.assert_allclose(left[:, 2], 0.0, atol=1e-10)
+    np.testing.assert_allclose(left[2, 0], geom.footprint[0, 2] + shift, atol=1e-10)
     # the limits are the URDF's <limit effort>, read here from its XML
     from xml.etree import ElementTree
 

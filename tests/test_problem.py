@@ -74,7 +74,7 @@ def _edited(tmp_path, name, old, new):
     ("broad-jump", ("dim = 3", "dim = 3\nboundary = \"rest\""), r"unknown key 'latent.boundary'; \[latent\] .* "
                                                                    "allows: control_points, dim, tube"),
     ("broad-jump", ("friction = 0.4", "friction = 0.4\nmass = 63.86"), r"unknown key 'options.mass'; \[options\] "
-                                                                       "allows: ball_tolerance, contact_tolerance"),
+                                                                       "allows: exchange, exchange_rounds"),
     ("broad-jump", ("friction = 0.4", 'friction = "high"'), "key 'options.friction' must be a number > 0, got 'high'"),
     ("broad-jump", ("n_flight = 80", "n_flight = 80.5"), "key 'options.n_flight' must be an integer >= 2, got 80.5"),
     ("broad-jump", ("two_phase = true", "two_phase = 1"), "key 'options.two_phase' must be true or false, got 1"),
@@ -107,7 +107,7 @@ def test_jump_options_are_the_jump_settings():
         if key.startswith("options.") and key[8:] not in data:
             assert problem.options[key[8:]] == getattr(defaults, f.name), f.name
     s = settings_from_problem(problem, 0.02)
-    assert s.mu == data["friction"] and s.n_flight == data["n_flight"] and s.n_control == 21 and s.tube == 0.02
+    assert s.mu == data["friction"] and s.n_flight == data["n_flight"] and s.n_control == 27 and s.tube == 0.02
     assert s.exchange_rounds == defaults.exchange_rounds  # not in the file: JumpSettings' default
     assert {k for k, v in OPTIONS.items() if v is None} == {"training_jumps", "training_stride", "torque_margin",
                                                             "torque_floor", "plant_training", "sweep_starts"}

@@ -66,14 +66,14 @@ def second_gpdm(cache: str) -> int:
 
 
 def cold_solve(tube: float) -> dict:
-    from latentoc.jump.problem import setup
+    from latentoc.jump.problem import problem_setup, settings_from_problem
     from latentoc.jump.solve import solve_jump
     from latentoc.latent.gp_layer import GPLayer
     from latentoc.problem_files import load_problem
-    from latentoc.jump.problem import settings_from_problem
 
-    js = setup(0)
-    s = settings_from_problem(load_problem("broad-jump"), tube)
+    problem = load_problem("broad-jump")
+    js = problem_setup(problem)
+    s = settings_from_problem(problem, tube)
     robot = js.robot(s.mu)
     t0 = time.perf_counter()
     blocks = js.blocks(robot)
@@ -89,20 +89,20 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
 
     from latentoc.jump import exchange
     from latentoc.jump.nlp import build_nlp, contact_sample_grid, flight_sample_grid, tube_times
-    from latentoc.jump.problem import settings_from_problem, setup
+    from latentoc.jump.problem import problem_setup, settings_from_problem
     from latentoc.jump.selection import Selection
     from latentoc.jump.start import initial_point
     from latentoc.latent.gp_layer import GPLayer
     from latentoc.problem_files import load_problem
 
-    js = setup(0)
-    s = settings_from_problem(load_problem("broad-jump"), tube)
+    problem = load_problem("broad-jump")
+    js = problem_setup(problem)
+    s = settings_from_problem(problem, tube)
     robot, layer, ph = js.robot(s.mu), GPLayer(js.gpdm), js.phases
     full = Selection.every_node_row(s.n_stance + s.n_land, robot.unmirrored.size, tube_times(s, ph, layer))
     selection = exchange.with_samples(full, contact_sample_grid(s, ph), flight_sample_grid(s, ph))
     nlp = build_nlp(robot, layer, js.blocks(robot), ph, s, js.init["P"], "distance", selection)
-    w = initial_point(robot, layer, nlp, js.init["P"], js.init["t"], js.init["base"], js.init["x_L"],
-                      ph.takeoff, ph.touchdown)
+    w = initial_point(robot, layer, nlp, ph, js.init["P"], js.init["x_L"])
     rows = []
     for f in nlp.nlp.families:
         if f.evaluator is None or not f.K:

@@ -10,9 +10,9 @@ left's mirror image); their roles in the rows:
   its toes body): the toes' contact patch, so that a foot on its toes alone can hold a moment (with
   the toe tip alone every base row of such a sample would ask the motion for none).
 
-In contact (stance and landing) the toe tip stays near its ground point ``x_pin`` at its standing height
-(the contact rows, :mod:`.rows.contact`): the captured push-off rolls over it (the ball
-rises ~8 cm before takeoff while the toe tip stays down) and the landing is toe-first.
+In contact (stance and landing) the toe tip's body is planted at its ground pose by construction
+(:mod:`.closure`): the toe tip and the pad do not move, and the heel and ball only with the toe joint
+once the heel is off the ground.
 
 Contact forces: four points per foot, each with a 2-D friction pyramid written with its two edge
 generators ``lam1 (mu, 1) + lam2 (-mu, 1)``, ``lam >= 0``.  In the sagittal plane this pyramid *is*
@@ -80,6 +80,12 @@ class FootGeometry:
         of pressure while the toes carry the foot alone (:mod:`.rows.contact`)."""
         assert self.footprint is not None, "the pad's setback is measured on the standing footprint"
         return round(float(self.footprint[0, 2] - self.footprint[0, 3]), 9)
+
+    @property
+    def toe_x(self) -> float:
+        """The toe tip's x standing (m): the landing's x_L less this is how far the planted body moved."""
+        assert self.footprint is not None, "the toe tip's standing place is on the standing footprint"
+        return float(self.footprint[0, 2])
 
     @property
     def heel_offset(self) -> np.ndarray:

@@ -4,8 +4,8 @@ A solve starts with the rows that are within a margin of binding at its start po
 and, after each converged solve, re-checks every hard constraint on the exported 1 kHz motion
 with numeric Pinocchio (:mod:`.export`, :func:`.verify.series`): torque limits, the needed
 wrench's cone and centre of pressure, the exported point forces' cones and their balance of the
-base rows, the ZMP and the COM in the support polygon, the tube and, with sticking contacts, the
-feet's placement (:func:`placement`). Every violated or nearly violated stretch adds a sample at its
+base rows, the ZMP and the COM in the support polygon, the tube and the unloaded points' clearance
+of the ground (:func:`clearance`; the loaded ones hold theirs by construction). Every violated or nearly violated stretch adds a sample at its
 worst 1 kHz time and its neighbours (contact: its own edge weights and the rows that are near
 there; flight: its own free-fall variables and torque rows; the tube: a point), and the contact
 nodes' own torque and polygon rows that are near are switched on; then the solve resumes warm
@@ -20,13 +20,14 @@ import numpy as np
 
 from ..nlp.evaluators import BlockEvaluator
 from ..nlp.exchange import TUBE_TOL, worst_times
+from .contact import POINTS
 from .nlp import JumpNLP
 from .phases import Phases
 from .robot import JumpRobot
 from .selection import POLYGON_EDGES, Selection
 from .settings import JumpSettings
 
-__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "placement", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING"]
+__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING"]
 
 NEIGHBOUR = 0.002  # s: either side of a short stretch's worst time (a bound moves a little)
 SPACING = 0.005  # s between the samples along a stretch that comes near
@@ -36,7 +37,7 @@ SPACING = 0.005  # s between the samples along a stretch that comes near
 class Margins:
     """How close to binding a row must come to be chosen: torque (fraction of the joint's limit
     range), wrench (body weights: needed normal force, friction cone, point cones), cop,
-    polygon and placement (m), tube (fraction of delta), dynamics (body weights: the base rows'
+    polygon and clearance (m), tube (fraction of delta), dynamics (body weights: the base rows'
     residual with the exported point forces, a contact time past it gets its own forces)."""
 
     torque: float
@@ -44,15 +45,15 @@ class Margins:
     cop: float
     polygon: float
     tube: float
-    placement: float
+    clearance: float
     dynamics: float
 
 
-SEED = Margins(torque=0.25, wrench=0.05, cop=0.01, polygon=0.02, tube=0.05, placement=0.0, dynamics=1e-6)  # at a phase's start
-NEAR = Margins(torque=0.05, wrench=0.01, cop=0.002, polygon=0.002, tube=0.005, placement=0.0, dynamics=1e-6)  # after a solve
+SEED = Margins(torque=0.25, wrench=0.05, cop=0.01, polygon=0.02, tube=0.05, clearance=0.0, dynamics=1e-6)  # at a phase's start
+NEAR = Margins(torque=0.05, wrench=0.01, cop=0.002, polygon=0.002, tube=0.005, clearance=0.0, dynamics=1e-6)  # after a solve
 # what counts as violated on the 1 kHz grid (torque in N m, wrench in N, lengths in m, tube in delta):
 # far below what the physics can tell apart, and above what Ipopt holds the rows to
-TOLERANCE = Margins(torque=0.01, wrench=0.1, cop=1e-4, polygon=1e-5, tube=TUBE_TOL, placement=1e-5, dynamics=1e-6)
+TOLERANCE = Margins(torque=0.01, wrench=0.1, cop=1e-4, polygon=1e-5, tube=TUBE_TOL, clearance=1e-5, dynamics=1e-6)
 
 
 def _allowed(idx: np.ndarray, allowed: np.ndarray) -> np.ndarray:
@@ -65,37 +66,21 @@ def _rel_torque(sr: dict[str, np.ndarray], robot: JumpRobot) -> np.ndarray:
     return sr["torque"][:, kept] / robot.torque_scale[kept]
 
 
-def placement(sr: dict[str, np.ndarray], traj: dict, x_L: float, robot: JumpRobot, phases: Phases,
-              s: JumpSettings) -> np.ndarray:
-    """The foot placement rows' slack on the 1 kHz grid (n x 7, m, NaN where a row does not apply),
-    the numeric twin of :func:`.rows.contact._placement_at`: the toe tip's x from its ground point and
-    its height, the heel and ball heights, the pad's while the ball is off the ground, the toe tip's
-    and the rearmost loaded point's sideways offsets."""
+def clearance(sr: dict[str, np.ndarray], traj: dict, robot: JumpRobot, phases: Phases) -> np.ndarray:
+    """The unloaded points' heights above their standing ones in the contact phases on the 1 kHz grid
+    (n x 4, m, NaN where a point is loaded or in flight), the numeric twin of
+    :func:`.rows.contact._clearance_at`."""
     t, P = np.asarray(traj["t"]), sr["points"]  # (n, 4, 3): heel, ball, toe, pad
     contact = np.asarray(traj["contact"]).astype(bool)
-    fp = robot.geom.footprint
-    assert fp is not None
-    x_pin = np.where(t >= phases.touchdown - 1e-9, x_L, 0.0)
-    on = {p: phases.loaded(p, t) for p in ("heel", "ball", "pad")}
-    ct, bt, ft = s.contact_tolerance, s.ball_tolerance, s.foot_tolerance
-    out = np.full((len(t), 7), np.nan)
-    out[:, 0] = ft - np.abs(P[:, 2, 0] - x_pin)
-    out[:, 1] = ft - np.abs(P[:, 2, 2] - fp[2, 2])  # heights above the standing ones
-    for c, k, point in ((2, 0, "heel"), (3, 1, "ball")):  # loaded: within ct of the ground; unloaded: above it
-        z = P[:, k, 2] - fp[2, k]
-        out[:, c] = np.where(on[point], ct - np.abs(z), z + (ct if point == "heel" else bt))
-    out[:, 4] = ct - np.abs(P[:, 2, 1] - fp[1, 2])
-    # the rearmost loaded point's sideways offset: the heel's, else the ball's, else the pad's
-    yaw = np.select([on["heel"], on["ball"], on["pad"]], [P[:, k, 1] - fp[1, k] for k in (0, 1, 3)], np.nan)
-    out[:, 5] = ct - np.abs(yaw)
-    pad = P[:, 3, 2] - fp[2, 3]
-    out[:, 6] = np.where(on["ball"], np.nan, np.where(on["pad"], ct - np.abs(pad), pad + bt))
-    out[~contact] = np.nan
+    assert robot.geom.footprint is not None
+    out = P[:, :, 2] - robot.geom.footprint[2][None, :]
+    for k, p in enumerate(POINTS):
+        out[phases.loaded(p, t) | ~contact, k] = np.nan
     return out
 
 
-def violations(sr: dict[str, np.ndarray], traj: dict, delta: float, weight: float,
-               placement_slack: np.ndarray | None = None) -> dict[str, float]:
+def violations(sr: dict[str, np.ndarray], traj: dict, delta: float, weight: float, clearance_slack: np.ndarray
+               ) -> dict[str, float]:
     """The worst violation of each checked kind on the 1 kHz grid (0: held), in N m, N, m and delta."""
     def worst(x: np.ndarray) -> float:
         return float(max(0.0, -np.nanmin(x))) if np.isfinite(x).any() else 0.0
@@ -103,7 +88,7 @@ def violations(sr: dict[str, np.ndarray], traj: dict, delta: float, weight: floa
     return {"torque": worst(sr["torque"]), "normal": worst(sr["normal"]), "friction": worst(sr["friction"]),
             "point_cone": worst(sr["point_cone"]), "cop": worst(sr["cop_loaded"]), "zmp": worst(sr["zmp"]),
             "com": worst(sr["com"]), "tube": float(max(0.0, np.max(traj["sigma2"]) / delta - 1.0)) if "sigma2" in traj
-            else 0.0, "placement": 0.0 if placement_slack is None else worst(placement_slack),
+            else 0.0, "clearance": worst(clearance_slack),
             "dynamics": float(np.max(sr["residual"][np.asarray(traj["contact"]).astype(bool)], initial=0.0)) / weight}
 
 
@@ -111,7 +96,7 @@ def violated(v: dict[str, float]) -> bool:
     """Whether any kind is violated beyond :data:`TOLERANCE`."""
     tol = {"torque": TOLERANCE.torque, "normal": TOLERANCE.wrench, "friction": TOLERANCE.wrench,
            "point_cone": TOLERANCE.wrench, "cop": TOLERANCE.cop, "zmp": TOLERANCE.polygon, "com": TOLERANCE.polygon,
-           "tube": TOLERANCE.tube, "placement": TOLERANCE.placement, "dynamics": TOLERANCE.dynamics}
+           "tube": TOLERANCE.tube, "clearance": TOLERANCE.clearance, "dynamics": TOLERANCE.dynamics}
     return any(v[k] > tol[k] for k in tol)
 
 
@@ -135,11 +120,11 @@ def _node_rows(nlp: JumpNLP, w: np.ndarray, robot: JumpRobot, phases: Phases, m:
     return torque, polygon
 
 
-def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray | None,
+def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
                 robot: JumpRobot, phases: Phases, s: JumpSettings, m: Margins) -> Selection:
     """The rows within the margins ``m`` of binding at ``w`` (module doc): the contact nodes' own
     rows, and samples at the worst 1 kHz time of each stretch that comes that near; ``place``: the
-    foot placement's slack (:func:`placement`, None without sticking contacts)."""
+    unloaded points' clearance (:func:`clearance`)."""
     delta = s.tube
     t = np.asarray(traj["t"])
     contact = np.asarray(traj["contact"]).astype(bool)
@@ -164,9 +149,8 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
     poly_near = poly < m.polygon  # NaN: False
     for e in range(poly.shape[1]):
         picked_c.update(worst_times(poly[:, e], poly_near[:, e] & inside, every, nb).tolist())
-    if place is not None:  # the feet between the samples: where a placement row is violated
-        for c in range(place.shape[1]):
-            picked_c.update(worst_times(place[:, c], place[:, c] < m.placement, every, nb).tolist())
+    for c in range(place.shape[1]):  # the unloaded points between the samples: where one comes near the ground
+        picked_c.update(worst_times(place[:, c], place[:, c] < m.clearance, every, nb).tolist())
     kc = _allowed(np.array(sorted(picked_c), int), contact & inside)
     kf = _allowed(np.array(sorted(picked_f), int), ~contact & inside)
     kt = np.zeros(0, int)
@@ -177,7 +161,7 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
     return Selection(node_torque, node_polygon, t[kc], torque_near[kc], poly_near[kc], t[kf], torque_near[kf], t[kt])
 
 
-def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray | None,
+def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
                    robot: JumpRobot, phases: Phases, s: JumpSettings, tube: np.ndarray) -> Selection:
     """A phase's first selection: the rows within :data:`SEED` of binding at its start ``w``, and
     the tube at ``tube``."""

@@ -1,9 +1,9 @@
 """The solved jump on a 1 kHz grid: q, v, a, torques and contact forces, for the numeric checks.
 
 Joint motion from the GP layer along the optimal latent path (or the joint path itself, the
-identity layer: then no latent path and no sigma^2), the base from the contact
-phases' splines and, in flight, ballistic from the takeoff state with the pitch rate
-integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
+identity layer: then no latent path and no sigma^2), in the contact phases with the legs closed
+and the base from the planted body (:mod:`.closure`) and, in flight, ballistic from the takeoff
+state with the pitch rate integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
 and samples (the wrench split is part of the solution there); between them, the edge weights
 interpolated and corrected to the non-negative weights nearest them that balance the sagittal base
 rows (:func:`corrected_edge_weights`). The exchange (:mod:`.exchange`) adds a contact sample wherever
@@ -22,6 +22,7 @@ from .flight import ballistic_base, flight_functions
 from .nlp import JumpNLP
 from .phases import Phases
 from .robot import JumpRobot
+from .start import takeoff_state
 
 __all__ = ["trajectory", "contact_geometry", "corrected_edge_weights"]
 
@@ -33,30 +34,33 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
     """Arrays of solution ``w`` of ``nlp`` on a 1 kHz grid and at the contact nodes (module doc)."""
     ph = phases
     parts = nlp.variables.unpack(w)
-    sp_, sps, spl = nlp.splines
     P = nlp.control_points(w)
     model = robot.sym.model
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
-    X, Xd, Xdd = (sp_.evaluate(P, t, k) for k in range(3))
+    X, Xd, Xdd = (nlp.spline.evaluate(P, t, k) for k in range(3))
     m = layer.motion(np.hstack([X, Xd, Xdd]))
-    path = {"sigma2": layer.variance(X)[0], "latent": X} if layer.has_tube else {}
+    d = getattr(layer, "d", X.shape[1])  # a leg residual's path: the latent coordinates first, then the residual
+    path = {"sigma2": layer.variance(X)[0], "latent": X[:, :d]} if layer.has_tube else {}
+    if d < X.shape[1]:
+        path.update(leg_residual=X[:, d:], leg_residual_control_points=P[:, d:], leg_residual_joints=getattr(layer, "joints"))
     st, la = t <= ph.takeoff, t >= ph.touchdown
     fl = ~st & ~la
+    Y, Yd, Ydd = m.y.copy(), m.yd.copy(), m.ydd.copy()
     B = [np.zeros((len(t), 3)) for _ in range(3)]
-    for k in range(3):
-        B[k][st] = sps.evaluate(parts["base_stance"], np.clip(t[st], 0, sps.duration), k)
-        B[k][la] = spl.evaluate(parts["base_land"], np.clip(t[la] - ph.touchdown, 0, spl.duration), k)
-    t_to = np.array([ph.takeoff])
-    m_to = layer.motion(np.hstack([sp_.evaluate(P, t_to, k) for k in range(3)]))
-    b_to = [sps.evaluate(parts["base_stance"], t_to, k).ravel() for k in range(2)]
+    assert robot.closure is not None
+    con = st | la
+    shift = np.where(la[con], float(parts["x_L"][0]) - robot.geom.toe_x, 0.0)
+    Y[con], Yd[con], Ydd[con], B[0][con], B[1][con], B[2][con] = robot.closure.evaluate(
+        m.y[con], m.yd[con], m.ydd[con], ph.held(t[con]), shift)
+    y_to, yd_to, b_to, bd_to = takeoff_state(robot, layer, nlp.spline, P, ph)
     tau_f = np.concatenate([[0.0], t[fl] - ph.takeoff])
-    Yf = [np.vstack([a[:1], b[fl]]).T for a, b in ((m_to.y, m.y), (m_to.yd, m.yd), (m_to.ydd, m.ydd))]
-    bb = ballistic_base(flight_functions(robot.sym, robot.smap), Yf[0], Yf[1], Yf[2], tau_f, b_to[0], b_to[1], m_to.y.T, m_to.yd.T)
+    Yf = [np.hstack([a, b[fl].T]) for a, b in ((y_to, m.y), (yd_to, m.yd), (np.zeros_like(y_to), m.ydd))]
+    bb = ballistic_base(flight_functions(robot.sym, robot.smap), Yf[0], Yf[1], Yf[2], tau_f, b_to, bd_to, y_to, yd_to)
     for k in range(3):
         B[k][fl] = bb[k].T[1:]
     q7, v6, a6 = base_to_freeflyer(*B)
     E = robot.E
-    Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in ((q7, m.y), (v6, m.yd), (a6, m.ydd)))
+    Q, V, A = (np.column_stack([b, y @ E.T]) for b, y in ((q7, Y), (v6, Yd), (a6, Ydd)))
 
     # contact forces: the NLP's edge weights at its nodes and samples, balanced between them (module doc)
     grid, W, mu = nlp.grid, robot.weight, robot.mu
@@ -98,7 +102,7 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
         node_w[j] = np.array(toe_wrench(lam_nodes[:, j] * W, P_feet[i], mu)).ravel()
     return {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
             "point_lambda": lam_t, "force_correction": correction, "contact": (st | la).astype(np.int8),
-            "loaded": loaded.astype(np.int8), **path, "control_points": P,
+            "loaded": loaded.astype(np.int8), **path, "control_points": P[:, :d],
             "node_t": node_t, "node_wrench": node_w, "node_lambda": lam_nodes.T,
             **contact_geometry(robot.geom),
             "takeoff": ph.takeoff, "touchdown": ph.touchdown, "settle": ph.settle,

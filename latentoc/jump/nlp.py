@@ -1,17 +1,19 @@
 """The broad-jump NLP (Sect. 4.2, Eq. 33-36): row families on nodes and samples, bounds, objective.
 
-Joint motion: y = mu_Q(x(t)) along the latent spline (Eq. 18, 26-28, the GP layer), or, for the
-full configuration-space baseline, the joint spline itself (the identity layer, :mod:`.path`); the base
-has its own (x, z, pitch) splines in the stance and the landing, and falls freely in flight.
-Hard constraints, each a row family (:mod:`.rows`), where :class:`~.selection.Selection` puts
-them:
+Joint motion: y = mu_Q(x(t)) along the latent spline (Eq. 18, 26-28, the GP layer; a double knot
+at each contact event, :meth:`.phases.Phases.latent_spline`), or, for the full configuration-space
+baseline, the joint spline itself (the identity layer, :mod:`.path`). In the stance and the landing
+the legs are closed and the base follows from the planted body (:mod:`.closure`), which holds its
+ground pose exactly; in flight the base falls freely. Hard constraints, each a row family
+(:mod:`.rows`), where :class:`~.selection.Selection` puts them:
 
-* contact nodes (stance and landing, every 10 ms): base rows = sum J^T f, the toe tip within
-  ``foot_tolerance`` of its ground point, the training contact schedule (a loaded heel or ball
-  on the ground, an unloaded one carries no force), and the chosen torque limits (Eq. 34) and
-  edges of the support polygon for the ZMP and, once the landing has settled, the COM (Eq. 35-36);
+* contact nodes (stance and landing, every 10 ms): base rows = sum J^T f, the training contact
+  schedule (an unloaded point above the ground, carrying no force), and the chosen torque limits
+  (Eq. 34) and edges of the support polygon for the ZMP and, once the landing has settled, the COM
+  (Eq. 35-36);
 * contact samples between the nodes: their own edge weights, the base rows and chosen rows;
-* takeoff and touchdown: the flight's state from the stance, the inelastic impact;
+* takeoff and touchdown: the flight's state from the stance, the landing at rest; the hinge's
+  switches at the heel's lift-off and strike;
 * the flight: the pitch integrates the pitch rate of the conserved momentum, the feet stay above
   the ground at the flight nodes, and flight samples hold the free-fall rows and chosen torques;
 * the tube sigma^2 <= delta (Eq. 29) at the selection's times (a latent path only).
@@ -67,7 +69,7 @@ class JumpNLP:
     row_times: np.ndarray
     row_components: np.ndarray
     grid: dict[str, np.ndarray]
-    splines: tuple[BSpline, BSpline, BSpline]
+    spline: BSpline
     selection: Selection
     objective: str
     P_fixed: np.ndarray
@@ -112,8 +114,7 @@ def contact_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float =
     T = ph.duration
     if s.sample_spacing <= 0:
         return np.zeros(0)
-    knots = np.concatenate([BSpline(s.n_control, T).breakpoints, BSpline(s.n_base_stance, ph.takeoff).breakpoints,
-                            ph.touchdown + BSpline(s.n_base_land, T - ph.touchdown).breakpoints])
+    knots = ph.latent_spline(s.n_control).breakpoints
     sw = ph.switch_samples(eps=1.0 / rate_hz)
     t = np.concatenate([np.arange(0.0, T, s.sample_spacing), knots, sw])
     t = np.unique(np.round(t * rate_hz) / rate_hz)
@@ -143,7 +144,6 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
     s, ph = settings, phases
-    T = ph.duration
     grid = node_grid(s, ph)
     tc = np.concatenate([grid["stance"], grid["land"]])
     nC, nk = len(tc), len(robot.unmirrored)
@@ -152,10 +152,9 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
     if len(sel.tube) and not layer.has_tube:
         raise ValueError("the selection has tube points but the layer has no sigma^2 (a joint path)")
-    splines = (BSpline(s.n_control, T), BSpline(s.n_base_stance, ph.takeoff), BSpline(s.n_base_land, T - ph.touchdown))
-    var = JumpVariables.layout(s.n_control, layer.latent_dim, s.n_base_stance, s.n_base_land, nC, len(grid["flight"]),
-                               len(sel.contact), len(sel.flight))
-    w = Wiring(robot, layer, blocks, ph, s, sel, var, splines, np.asarray(P_fixed, float), grid)
+    spline = ph.latent_spline(s.n_control)
+    var = JumpVariables.layout(s.n_control, layer.latent_dim, nC, len(grid["flight"]), len(sel.contact), len(sel.flight))
+    w = Wiring(robot, layer, blocks, ph, s, sel, var, spline, np.asarray(P_fixed, float), grid)
     for wire in families():
         wire(w)
     nlp = SparseNLP(var.n, w.families, _objective(var, P_fixed, objective))
@@ -167,14 +166,14 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
         half = np.broadcast_to(np.asarray(P_range, float), P0.shape)
         lbx[var.slices["P"]], ubx[var.slices["P"]] = (P0 - half).ravel(), (P0 + half).ravel()
     nsub = max(1, int(s.flight_substeps))
-    return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, splines, sel, objective,
+    return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, spline, sel, objective,
                    np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, nsub), nsub)
 
 
 def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Function:
     w = ca.SX.sym("w", var.n)
-    lam, imp, lam_s = w[var.slices["lam"]], w[var.slices["lam_impact"]], w[var.slices["lam_sample"]]
-    reg = FORCE_REGULARISATION * (ca.sumsqr(lam) + ca.sumsqr(imp) + ca.sumsqr(lam_s))
+    lam, lam_s = w[var.slices["lam"]], w[var.slices["lam_sample"]]
+    reg = FORCE_REGULARISATION * (ca.sumsqr(lam) + ca.sumsqr(lam_s))
     if objective == "distance":
         f = -w[var.slices["x_L"]] + reg
     else:  # the squared deviation of the free control points from the training fit
@@ -185,12 +184,11 @@ def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Fu
 
 def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: JumpRobot, s: JumpSettings,
                 ph: Phases) -> tuple[np.ndarray, np.ndarray]:
-    bounds = {"dynamics": (0, 0), "flight_base": (0, 0), "flight_pitch": (0, 0), "ball_height": (-s.ball_tolerance, np.inf),
-              "toe_position": (-s.foot_tolerance, s.foot_tolerance), "heel_height": (-s.contact_tolerance, np.inf),
-              "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "takeoff": (0, 0),
+    bounds = {"dynamics": (0, 0), "flight_base": (0, 0), "flight_pitch": (0, 0), "height": (0, np.inf),
+              "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "takeoff": (0, 0), "closure_gap": (0, 0),
               "pitch_integration": (0, 0), "flight_clearance": (0, np.inf), "touchdown_position": (0, 0),
-              "impact": (0, 0), "tube": (-np.inf, 1.0 - TUBE_BACKOFF), "pitch_rate": (0, 0),
-              **{k: (0, np.inf) for k in ("cop_front", "cop_heel", "cop_ball", "cop_pad")}}
+              "touchdown_velocity": (0, 0), "hinge_switch": (0, 0), "tube": (-np.inf, 1.0 - TUBE_BACKOFF),
+              "pitch_rate": (0, 0), **{k: (0, np.inf) for k in ("cop_front", "cop_heel", "cop_ball", "cop_pad")}}
     lbg, ubg = np.zeros(len(names)), np.zeros(len(names))
     for k, (lo, hi) in bounds.items():
         sel = names == k
@@ -199,18 +197,6 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: 
     act, scale = robot.active, robot.torque_scale
     lbg[torque] = (robot.limits.tau_min[act][comps[torque]] + TORQUE_BACKOFF) / scale[comps[torque]]
     ubg[torque] = (robot.limits.tau_max[act][comps[torque]] - TORQUE_BACKOFF) / scale[comps[torque]]
-    # the contact schedule: a loaded heel stays on the ground, a loaded ball within the tolerance
-    heel, ball = names == "heel_height", names == "ball_height"
-    ubg[heel] = np.where(ph.loaded("heel", times[heel]), s.contact_tolerance, np.inf)
-    loaded = ph.loaded("ball", times[ball])
-    lbg[ball] = np.where(loaded, -s.contact_tolerance, -s.ball_tolerance)
-    ubg[ball] = np.where(loaded, s.contact_tolerance, np.inf)
-    pad = names == "pad_height"  # as the ball's; a held point's y within the tolerance of its ground point
-    loaded = ph.loaded("pad", times[pad])
-    lbg[pad] = np.where(loaded, -s.contact_tolerance, -s.ball_tolerance)
-    ubg[pad] = np.where(loaded, s.contact_tolerance, np.inf)
-    side = names == "point_y"
-    lbg[side], ubg[side] = -s.contact_tolerance, s.contact_tolerance
     limits.bounds(robot, names, comps, lbg, ubg)
     return lbg, ubg
 
@@ -224,9 +210,4 @@ def _variable_bounds(var: JumpVariables, ph: Phases, tc: np.ndarray, t_samples: 
         ub = ubx[var.slices[name]].reshape(len(times), EDGES)  # a view
         for k, point in enumerate(POINTS):
             ub[~ph.loaded(point, times), 2 * k:2 * k + 2] = 0.0
-    lbx[var.slices["lam_impact"]] = 0.0
-    imp_ub = ubx[var.slices["lam_impact"]]
-    t_td = np.array([ph.touchdown])
-    for k, point in enumerate(POINTS):
-        imp_ub[2 * k:2 * k + 2] = np.inf if ph.loaded(point, t_td)[0] else 0.0
     return lbx, ubx

@@ -10,8 +10,10 @@
   centre joints that flip sign under the mirror stay zero (a symmetric motion has none). No tube.
 
 With ``[options] leg_residual`` (deg) the latent path carries a residual beside it: the path is
-(x, r), the left leg's learned joints are the GP mean's plus r (:class:`~latentoc.latent.residual_layer.ResidualLayer`),
-each free control point of r within +-leg_residual of zero, the tube on x alone.
+(x, r), the left leg's sagittal joints are the GP mean's plus r (:class:`~latentoc.latent.residual_layer.ResidualLayer`),
+each free control point of r within +-leg_residual of zero, the tube on x alone. With the planted
+foot by construction (:mod:`.closure`) the base follows the legs, and this residual is what lets them
+carry a physical push-off (docs/broad-jump.md, issue 45).
 
 Every other row of the jump (contact, flight, ZMP, COM, torque limits, friction) is the same NLP.
 """
@@ -22,12 +24,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..gpdm import GPDM
+from ..spline import BSpline
 from ..latent.gp_layer import GPLayer, IdentityLayer, Layer
 from ..latent.residual_layer import ResidualLayer
 
-__all__ = ["JumpPath", "METHODS", "latent_path", "joint_range_path", "leg_residual_path"]
+__all__ = ["JumpPath", "METHODS", "PATH_SMOOTHING", "initial_latent_path", "latent_path", "joint_range_path",
+           "leg_residual_path"]
 
 METHODS = ("latent", "joint-range")
+PATH_SMOOTHING = 1e-3  # weight of int ||x''||^2 dt in the initial latent path fit
 
 
 @dataclass(frozen=True)
@@ -68,3 +73,25 @@ def leg_residual_path(gpdm: GPDM, P: np.ndarray, joints: list[int], bound_deg: f
     r = len(joints)
     half = np.hstack([np.full((P.shape[0] - 2, P.shape[1]), np.inf), np.full((P.shape[0] - 2, r), np.radians(bound_deg))])
     return JumpPath("latent", ResidualLayer(gpdm, np.asarray(joints, int)), np.hstack([P, np.zeros((P.shape[0], r))]), half)
+
+
+def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: float, keep: np.ndarray) -> np.ndarray:
+    """Control points of the smoothed fit (:meth:`BSpline.fit` with ``smoothing * int ||x''||^2``)
+    whose value and velocity at the times ``keep`` (takeoff, touchdown) equal the plain fit's, so
+    the smoothing does not slow the push-off. Equality-constrained least squares (KKT system)."""
+    plain = sp.fit(t, X)
+    if smoothing <= 0:
+        return plain
+    S = sp.smoothing_rows(smoothing)
+    A = np.vstack([sp.basis(t), S])
+    b = np.vstack([X, np.zeros((S.shape[0], X.shape[1]))])
+    C = np.vstack([sp.basis(keep, 0), sp.basis(keep, 1)])
+    d = C @ plain
+    P = plain.copy()  # the end control points stay (the end poses)
+    b = b - A[:, [0, -1]] @ P[[0, -1]]
+    d = d - C[:, [0, -1]] @ P[[0, -1]]
+    A, C = A[:, 1:-1], C[:, 1:-1]
+    n, m = A.shape[1], C.shape[0]
+    K = np.block([[2 * A.T @ A, C.T], [C, np.zeros((m, m))]])
+    P[1:-1] = np.linalg.solve(K, np.vstack([2 * A.T @ b, d]))[:n]
+    return P

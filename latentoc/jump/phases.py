@@ -1,7 +1,7 @@
-"""Phase timing of the jump and the node grid (Sect. 4.2).
+"""Phase timing of the jump, its contact schedule and the path's knots at its events (Sect. 4.2).
 
 Takeoff and touchdown come from the training motion's contact timing, refined to the toe
-tip, the point the stance and landing are pinned at (:mod:`.contact`):
+tip, on the body the stance and the landing plant (:mod:`.closure`):
 :func:`latentoc.mocap.jumps.detect_jumps` finds the flight by the feet's height (1.5 cm
 above their floor: 0.350 s and 0.683 s on the paper's jump); the toe tip, however, leaves
 the ground earlier and lands later.  Takeoff is the toe-off, the frame at which the toe tip
@@ -16,9 +16,8 @@ training motion (within ``CONTACT_HEIGHT`` of their standing height): the heel u
 ``heel_off`` (0.200 s on the paper's jump) and again from ``heel_strike`` (0.792 s), the ball
 until ``ball_off`` (0.267 s) and from ``ball_strike`` (0.717 s); the toe tip carries force in
 every contact node.  A fixed contact sequence keeps the NLP free of complementarity rows,
-whose degenerate multipliers stalled Ipopt (measured in issue 6).
-Nodes: ``n_stance`` on [0, t_to], ``n_flight`` on [t_to, t_td], ``n_land`` on [t_td, T]
-(the phase boundaries appear in both neighbouring phases).
+whose degenerate multipliers stalled Ipopt (measured in issue 6). The latent path has a double
+knot at each event that changes the contact model (:meth:`Phases.latent_spline`).
 """
 from __future__ import annotations
 
@@ -30,6 +29,7 @@ import pinocchio as pin
 
 from ..errors import ProblemError
 from ..mocap.jumps import detect_jumps
+from ..spline import BSpline
 from .contact import POINTS, FootGeometry, foot_points, point_joint
 from .training import JumpTraining
 
@@ -57,15 +57,6 @@ class Phases:
             return np.zeros(t.shape, bool)
         return (t <= self.heel_off + 1e-9) | (t >= self.heel_strike - 1e-9)
 
-    def pivot(self, t: np.ndarray) -> np.ndarray:
-        """Whether the toes roll on the toe tip (after the ball rises, before it strikes) at contact
-        times ``t``."""
-        t = np.asarray(t, float)
-        if self.ball_off is None or self.ball_strike is None:
-            return np.zeros(t.shape, bool)
-        return ((t > self.ball_off + 1e-9) & (t <= self.takeoff + 1e-9)) | \
-            ((t >= self.touchdown - 1e-9) & (t < self.ball_strike - 1e-9))
-
     def loaded(self, point: str, t: np.ndarray) -> np.ndarray:
         """Whether ``point`` ("heel", "ball", "toe" or "pad": the toes', or a rigid sole's with the
         ball) may carry force at contact times ``t``."""
@@ -78,6 +69,47 @@ class Phases:
         assert off is not None and strike is not None  # the schedule is whole or absent
         return (t <= off + 1e-9) | (t >= strike - 1e-9)
 
+    def held(self, t: np.ndarray) -> np.ndarray:
+        """Whether the heel body's hinge holds its standing angle (the foot flat in contact) at times t
+        (:mod:`.closure`)."""
+        t = np.asarray(t, float)
+        contact = (t <= self.takeoff + 1e-9) | (t >= self.touchdown - 1e-9)
+        return self.flat(t) & contact
+
+    def closing(self, t: np.ndarray) -> np.ndarray:
+        """Whether contact times ``t`` end the phase before an event (the takeoff, the heel's lift-off):
+        the path's derivatives there are the left limits (:meth:`latent_spline`'s double knots)."""
+        t = np.asarray(t, float)
+        ends = [self.takeoff] + ([self.heel_off] if self.heel_off is not None and self.heel_off in self.events else [])
+        return np.isclose(t[..., None], ends, rtol=0.0, atol=1e-12).any(axis=-1)
+
+    @property
+    def events(self) -> list[float]:
+        """The times at which the contact model changes: the heel's lift-off and strike inside the
+        contact phases, the takeoff and the touchdown."""
+        ev = [self.takeoff, self.touchdown]
+        if self.heel_off is not None and 0.0 < self.heel_off < self.takeoff - 1e-9:
+            ev.append(self.heel_off)
+        if self.heel_strike is not None and self.touchdown + 1e-9 < self.heel_strike < self.duration:
+            ev.append(self.heel_strike)
+        return sorted(ev)
+
+    def latent_spline(self, n_control: int) -> BSpline:
+        """The path's cubic B-spline with ``n_control`` control points: a double knot at each of the
+        :attr:`events` (C1: the accelerations jump as the contact forces switch) and the rest of the
+        polynomial pieces spread over the phases by their durations, one at least."""
+        ev = self.events
+        bounds = np.array([0.0, *ev, self.duration])
+        n_pieces = n_control - 3 - len(ev)
+        if n_pieces < len(ev) + 1:
+            raise ProblemError(f"key 'latent.control_points': {n_control} control points cannot span the jump's "
+                               f"{len(ev) + 1} contact phases; it needs at least {2 * len(ev) + 4}")
+        share = np.diff(bounds) / self.duration * (n_pieces - len(ev) - 1)
+        pieces = 1 + np.floor(share).astype(int)
+        for k in np.argsort(share - np.floor(share))[::-1][:n_pieces - int(pieces.sum())]:
+            pieces[k] += 1
+        return BSpline.phased(self.duration, ev, pieces.tolist(), [2] * len(ev))
+
     def switch_samples(self, eps: float = 5e-4) -> np.ndarray:
         """Times just inside each unloaded interval of the contact schedule: ``eps`` after the heel
         and ball leave the ground and before they strike it (empty without a schedule)."""
@@ -87,27 +119,20 @@ class Phases:
         inside = ((t > 0) & (t < self.takeoff)) | ((t > self.touchdown) & (t < self.duration))
         return t[inside]
 
-    def grid(self, n_stance: int, n_flight: int, n_land: int, push_off: tuple[float, int] = (0.0, 0)
-             ) -> dict[str, np.ndarray]:
-        """Node times; ``push_off = (span, n)`` adds n more stance nodes, evenly spaced, in the
-        last ``span`` seconds before takeoff, where the contact force falls fastest."""
-        stance = np.linspace(0.0, self.takeoff, n_stance)
-        span, n = push_off
-        if span > 0 and n > 0:
-            extra = np.linspace(self.takeoff - span, self.takeoff, n + 2)[1:-1]
-            stance = np.unique(np.concatenate([stance, extra]).round(12))
-        return {"stance": stance, "flight": np.linspace(self.takeoff, self.touchdown, n_flight),
-                "land": np.linspace(self.touchdown, self.duration, n_land)}
+
+def toe_path(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
+    """The left toe tip (x, y, z) in every configuration (n x 3)."""
+    d = model.createData()
+    out = np.zeros((len(Q), 3))
+    for i, q in enumerate(Q):
+        pin.framesForwardKinematics(model, d, q)
+        out[i] = foot_points(model, d, geom)[:, 2]
+    return out
 
 
 def toe_heights(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
     """Height of the left toe tip in every configuration."""
-    d = model.createData()
-    out = np.zeros(len(Q))
-    for i, q in enumerate(Q):
-        pin.framesForwardKinematics(model, d, q)
-        out[i] = foot_points(model, d, geom)[2, 2]
-    return out
+    return toe_path(model, Q, geom)[:, 2]
 
 
 def contact_schedule(model: pin.Model, tr: JumpTraining, geom: FootGeometry, takeoff: float,

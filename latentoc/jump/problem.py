@@ -13,6 +13,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 from dataclasses import asdict, dataclass, field, fields
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -28,13 +29,13 @@ from ..kind import Solution, joint_range
 from ..motions.problem_inputs import problem_dir
 from ..problem import Problem, apply_overrides
 from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
-from ..spline import BSpline
 from ..tube import TUBE, relative_tube, tube_delta
 from .base import base_to_freeflyer
+from .closure import LegClosure
 from .cleaning import PlantedTraining, learned_leg, plantable, planted_training
-from .contact import POINTS, FootGeometry, foot_points
-from .path import METHODS, joint_range_path, latent_path, leg_residual_path
-from .phases import SCHEDULE_ORDER, Phases, training_phases
+from .contact import POINTS, FootGeometry
+from .path import METHODS, PATH_SMOOTHING, initial_latent_path, joint_range_path, latent_path, leg_residual_path
+from .phases import SCHEDULE_ORDER, Phases, toe_path, training_phases
 from .robot import JumpRobot
 from .rows import row_blocks
 from .settings import FIELD_DOCS, JumpSettings
@@ -46,7 +47,6 @@ from .training import JumpTraining, antisymmetric_centre, motion_training, train
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
            "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
 
-PATH_SMOOTHING = 1e-3  # weight of int ||x''||^2 dt in the initial latent path fit
 
 
 @dataclass(eq=False)
@@ -67,9 +67,14 @@ class JumpSetup:
     joint_limits: bool = False  # the model's joint position and velocity limits held (``limits = "urdf"``)
     _blocks: dict = field(default_factory=dict, repr=False)
 
+    @cached_property
+    def closure(self) -> LegClosure:
+        """The planted foot of the training's standing pose (:mod:`.closure`)."""
+        return LegClosure.of(self.sym, self.smap, self.geom, self.training.Q[0])
+
     def robot(self, mu: float) -> JumpRobot:
         return JumpRobot(self.sym, self.smap, self.geom, self.limits, mu, float(sum(i.mass for i in self.model.inertias)),
-                         joint_limits=self.joint_limits)
+                         joint_limits=self.joint_limits, closure=self.closure)
 
     def blocks(self, robot: JumpRobot, layer: Layer | None = None) -> dict[str, RobotBlock]:
         """The row families' blocks for ``layer`` (default: the GP layer's latent dimension),
@@ -84,16 +89,7 @@ class JumpSetup:
         return self._blocks[key]
 
 
-def _toe_x(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:
-    d = model.createData()
-    out = np.zeros(len(Q))
-    for i, q in enumerate(Q):
-        pin.framesForwardKinematics(model, d, q)
-        out[i] = foot_points(model, d, geom)[0, 2]
-    return out
-
-
-def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, torque_margin: float = 0.1,
+def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 27, torque_margin: float = 0.1,
           gpdm_settings: GPDMSettings | None = None, path_smoothing: float = PATH_SMOOTHING,
           torque_floor: float = 5.0, stride: int = 1, plant: bool = False,
           robot: RobotDeclaration = CMU_HUMANOID, base_dir: Path = Path("."),
@@ -130,45 +126,24 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 21, tor
     Ys = [t.Y[::stride] for t in trs]
     gp = cached_gpdm(Ys if len(trs) > 1 else Ys[0], gpdm_settings or GPDMSettings(latent_dim=latent_dim))
     geom = robot.geometry(model, tr.Q[0])
-    phases = training_phases(model, tr, geom, declared=schedule)
+    # a planted jump keeps the schedule it was planted to: its feet are planted exactly then
+    phases = schedules[0] if planted is not None else training_phases(model, tr, geom, declared=schedule)
     contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
     loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits: TrainingDynamics | TorqueLimits = estimate_training_dynamics(
         model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded, floor=torque_floor) \
         if robot.limits == "training" else urdf_torque_limits(model)
     X = gp.latent_trajectories()[0]
-    P = initial_latent_path(BSpline(n_control, tr.duration), tr.t[::stride], X, path_smoothing,
-                            np.array([phases.takeoff, phases.touchdown]))
+    spline = phases.latent_spline(n_control)
+    P = initial_latent_path(spline, tr.t[::stride], X, path_smoothing, np.array([phases.takeoff, phases.touchdown]))
     # the full-space baseline's start: the least-squares fit of the training joints (every frame);
     # unsmoothed, its accelerations are already below the latent start's joint motion's
-    P_joint = BSpline(n_control, tr.duration).fit(tr.t, tr.Y)
-    bx = _toe_x(model, tr.Q, geom)
+    P_joint = spline.fit(tr.t, tr.Y)
+    bx = toe_path(model, tr.Q, geom)[:, 0]
     td = int(np.argmin(np.abs(tr.t - phases.touchdown)))
     init = {"P": P, "P_joint": P_joint, "t": tr.t, "base": tr.base, "x_L": float(np.median(bx[td:]))}
     return JumpSetup(model, smap, tr, gp, phases, geom, limits, init, float(np.median(bx[td:]) - bx[0]),
                      SymbolicModel(model), planted, joint_limits=robot.limits == "urdf")
-
-
-def initial_latent_path(sp: BSpline, t: np.ndarray, X: np.ndarray, smoothing: float, keep: np.ndarray) -> np.ndarray:
-    """Control points of the smoothed fit (:meth:`BSpline.fit` with ``smoothing * int ||x''||^2``)
-    whose value and velocity at the times ``keep`` (takeoff, touchdown) equal the plain fit's, so
-    the smoothing does not slow the push-off. Equality-constrained least squares (KKT system)."""
-    plain = sp.fit(t, X)
-    if smoothing <= 0:
-        return plain
-    S = sp.smoothing_rows(smoothing)
-    A = np.vstack([sp.basis(t), S])
-    b = np.vstack([X, np.zeros((S.shape[0], X.shape[1]))])
-    C = np.vstack([sp.basis(keep, 0), sp.basis(keep, 1)])
-    d = C @ plain
-    P = plain.copy()  # the end control points stay (the end poses)
-    b = b - A[:, [0, -1]] @ P[[0, -1]]
-    d = d - C[:, [0, -1]] @ P[[0, -1]]
-    A, C = A[:, 1:-1], C[:, 1:-1]
-    n, m = A.shape[1], C.shape[0]
-    K = np.block([[2 * A.T @ A, C.T], [C, np.zeros((m, m))]])
-    P[1:-1] = np.linalg.solve(K, np.vstack([2 * A.T @ b, d]))[:n]
-    return P
 
 
 # ------------------------------------------------------------------ the problem file
@@ -191,8 +166,7 @@ _TOML_NAMES = {"mu": "friction"}  # JumpSettings field -> its [options] key
 #: ranges of the JumpSettings fields in [options] (lo, hi, lo_open); a field not listed has its type only
 RANGES: dict[str, tuple[float | None, float | None, bool]] = {
     "mu": (0.0, None, True), "n_stance": (2, None, False), "n_flight": (2, None, False), "n_land": (2, None, False),
-    "n_base_stance": (4, None, False), "n_base_land": (4, None, False), "foot_tolerance": (0.0, None, False),
-    "ball_tolerance": (0.0, None, False), "contact_tolerance": (0.0, None, False), "flight_substeps": (1, None, False),
+    "flight_substeps": (1, None, False),
     "tube_spacing": (0.0, None, True), "sample_spacing": (0.0, None, False),
     "exchange_rounds": (1, None, False), "leg_residual": (0.0, None, False)}
 
@@ -366,8 +340,9 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     gpdm_time = time.perf_counter() - t0
     if k is not None:
         path = joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
-    elif o["leg_residual"] > 0:  # the left leg's learned joints get a bounded residual
-        path = leg_residual_path(js.gpdm, js.init["P"], learned_leg(js.model, js.smap, js.geom), o["leg_residual"])
+    elif o["leg_residual"] > 0:  # the left leg's sagittal joints (not the closure's) get a bounded residual
+        sagittal = [j for j in learned_leg(js.model, js.smap, js.geom) if j not in js.closure.dependent]
+        path = leg_residual_path(js.gpdm, js.init["P"], sagittal, o["leg_residual"])
     else:
         path = latent_path(GPLayer(js.gpdm), js.init["P"])
     delta = tube_delta(problem.tube, js.gpdm)

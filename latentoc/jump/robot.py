@@ -16,6 +16,7 @@ from ..dynamics import SymbolicModel
 from ..min_torque.limits import Limits
 from ..mocap.symmetry import SymmetryMap
 from .base import base_function
+from .closure import LegClosure
 from .contact import POINTS, FootGeometry, joint_embedding, points_function
 from .torque_limits import TorqueLimits, TrainingDynamics
 from .zmp import G
@@ -34,6 +35,7 @@ class JumpRobot:
     mu: float
     mass: float
     joint_limits: bool = False  # the model's position and velocity limits as rows (:mod:`.rows.limits`)
+    closure: LegClosure | None = None  # the planted foot: closed legs and the base in contact (:mod:`.closure`)
 
     @property
     def weight(self) -> float:
@@ -121,6 +123,13 @@ class JumpRobot:
         E = ca.DM(self.E)
         q7, v6, a6 = base_function()(b, bd, bdd)
         return ca.vertcat(q7, E @ y), ca.vertcat(v6, E @ yd), ca.vertcat(a6, E @ ydd)
+
+    def planted(self, y, yd, ydd, held, shift):
+        """The contact phases' closed legs (y, yd, ydd) and sagittal base (b, bd, bdd): the planted body
+        at its ground pose moved by ``shift`` along x, the hinge held where ``held`` (:mod:`.closure`)."""
+        assert self.closure is not None, "the contact rows need the robot's leg closure"
+        y, yd, ydd = self.closure.legs(y, yd, ydd, held)
+        return (y, yd, ydd), self.closure.planted_base(y, yd, ydd, shift)
 
     def points(self, q, shift):
         """World heel, ball, toe and pad (3 x 4 columns) of pose q moved by the base translation (x, z)."""

@@ -12,17 +12,11 @@ class JumpSettings:
 
     tube: float = 0.02  # delta of Eq. 29 (units of sigma^2)
     mu: float = MU  # friction coefficient
-    n_control: int = 21  # latent spline control points (paper 11: too few for the push-off)
+    n_control: int = 27  # latent spline control points, a double knot at each contact event
     n_stance: int = 32  # contact nodes every 10 ms
     n_flight: int = 80  # flight nodes every 5 ms
     n_land: int = 62
-    n_base_stance: int = 12  # control points of the stance's (x, z, pitch) base spline
-    n_base_land: int = 12
-    foot_tolerance: float = 0.01  # m the toe tip may move from its ground point in contact
-    ball_tolerance: float = 0.02  # m an unloaded ball may sink below the ground (soft sole)
-    contact_tolerance: float = 0.01  # m a loaded heel or ball stays within this of the ground
-    leg_residual: float = 0.0  # deg: a bounded residual on the left leg's learned joints beside the latent path (0: none)
-    sticking: bool = False  # loaded points held at the samples too, and sideways (:mod:`.rows.contact`)
+    leg_residual: float = 0.0  # deg: a bounded residual on the legs' sagittal joints beside the latent path (0: none)
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     tube_spacing: float = 0.005  # s between tube points
     sample_spacing: float = 0.005  # s between the contact and flight samples of phase 2 (0: none)
@@ -42,13 +36,7 @@ FIELD_DOCS: dict[str, str] = {
     'n_stance': 'contact nodes of the stance, every 10 ms',
     'n_flight': 'flight nodes, every 5 ms',
     'n_land': 'contact nodes of the landing, touchdown to the end',
-    'n_base_stance': "control points of the stance's (x, z, pitch) base spline",
-    'n_base_land': "control points of the landing's (x, z, pitch) base spline",
-    'foot_tolerance': 'm the toe tip may move from its ground point in contact',
-    'ball_tolerance': 'm an unloaded ball may sink below the ground (soft sole)',
-    'contact_tolerance': 'm a loaded heel or ball stays within this of the ground',
-    'leg_residual': "deg: a bounded residual on the left leg's learned joints beside the latent path (0: none)",
-    'sticking': 'loaded points held at the contact samples too, and sideways',
+    'leg_residual': "deg: a bounded residual on the legs' sagittal joints beside the latent path (0: none)",
     'flight_substeps': 'trapezoid steps of the pitch rate per flight node interval',
     'tube_spacing': "s between the tube's points",
     'sample_spacing': 's between the contact and flight samples of phase 2 (0: none)',

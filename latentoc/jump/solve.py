@@ -27,6 +27,7 @@ from .phases import Phases
 from .robot import JumpRobot
 from .selection import Selection
 from .settings import JumpSettings
+from .consistent_start import consistent_path
 from .start import initial_point
 from .verify import series
 from .warm import carried_multipliers, carried_point
@@ -92,6 +93,7 @@ class _Solve:
         self.tube = tube_times(settings, phases, layer)
         self.t0 = time.perf_counter()
         self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
+        self.consistent: dict = {}  # the consistent start's residuals (:mod:`.consistent_start`)
 
     def lap(self, part: str) -> None:
         self.t0 = self.clock.add(part, self.t0)
@@ -102,13 +104,12 @@ class _Solve:
         self.lap("build_s")
         return nlp
 
-    def check(self, nlp: JumpNLP, w: np.ndarray) -> tuple[dict, dict, np.ndarray | None]:
-        """The export of ``w`` on the 1 kHz grid, its constraints' slack there and, with sticking
-        contacts, the foot placement's (:func:`.exchange.placement`)."""
+    def check(self, nlp: JumpNLP, w: np.ndarray) -> tuple[dict, dict, np.ndarray]:
+        """The export of ``w`` on the 1 kHz grid, its constraints' slack there and the unloaded points'
+        clearance (:func:`.exchange.clearance`)."""
         traj = trajectory(self.robot, self.layer, self.ph, nlp, w)
         sr = series(self.model, traj, self.robot.mu)
-        place = (exchange.placement(sr, traj, float(nlp.variables.unpack(w)["x_L"][0]), self.robot, self.ph, self.s)
-                 if self.s.sticking else None)
+        place = exchange.clearance(sr, traj, self.robot, self.ph)
         self.last_check = (nlp, w, traj, sr)
         self.lap("check_s")
         return traj, sr, place
@@ -126,8 +127,13 @@ class _Solve:
         s, st = self.s, self.start
         full = self.build("feasibility", Selection.every_node_row(s.n_stance + s.n_land, self.robot.unmirrored.size,
                                                                   self.tube))
-        x = initial_point(self.robot, self.layer, full, st["P"], st["t"], st["base"], st["x_L"], self.ph.takeoff,
-                          self.ph.touchdown)
+        P, x_L = st["P"], st["x_L"]
+        if self.layer.has_tube:  # the latent path moved least so that its contacts are physical
+            base = full.spline.fit(st["t"], st["base"])
+            P, x_L, self.consistent = consistent_path(self.robot, self.layer, full.spline, self.ph, P, x_L,
+                                                      lambda t: full.spline.evaluate(base, t, 2), s.tube,
+                                                      columns=getattr(self.layer, "d", None))
+        x = initial_point(self.robot, self.layer, full, self.ph, P, x_L)
         self.lap("build_s")
         if not s.two_phase:
             return full, x, None
@@ -201,6 +207,7 @@ def solve_jump(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], ph
     convergence += [{"phase": "2", "round": k + 1, "history": r.pop("history")} for k, r in enumerate(rounds)]
     result = _result(settings, nlp2, run2, rounds, run1, nlp_start, warm is not None, js.clock)
     result["convergence"] = convergence
+    result["consistent_start"] = js.consistent
     return JumpSolution(nlp2, w, run2, run1, traj, sr, result)
 
 

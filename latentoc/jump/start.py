@@ -1,9 +1,8 @@
 """The jump's initial point: the training motion in the NLP's variables.
 
 The path is the setup's smoothed fit of the learned latent points (or of the training joints,
-:mod:`.path`); the contact phases'
-base splines are least-squares fits of the captured base; the flight's takeoff state and pitch
-follow from the stance at takeoff (ballistic, :mod:`.flight`); the contact forces are the
+:mod:`.path`); the flight's takeoff state and pitch follow from the stance's closed legs and planted
+base at takeoff (ballistic, :mod:`.flight`, :mod:`.closure`); the contact forces are the
 non-negative edge weights of the loaded points that best balance each node's base rows. The
 samples' variables (:func:`sample_values`) follow from the rest of a point, so a point can be
 carried into an NLP with more samples.
@@ -14,12 +13,14 @@ import numpy as np
 from scipy.optimize import nnls
 
 from ..latent.gp_layer import Layer
+from ..spline import BSpline
 from .contact import EDGES
 from .flight import ballistic_base, flight_functions
 from .nlp import JumpNLP
+from .phases import Phases
 from .robot import JumpRobot
 
-__all__ = ["initial_point", "sample_values", "balanced_forces"]
+__all__ = ["initial_point", "sample_values", "balanced_forces", "takeoff_state"]
 
 
 def _joint_motion(layer: Layer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.ndarray]:
@@ -28,27 +29,28 @@ def _joint_motion(layer: Layer, sp_, P: np.ndarray, t: np.ndarray) -> list[np.nd
     return [m.y.T, m.yd.T, m.ydd.T]  # n x K each
 
 
-def initial_point(robot: JumpRobot, layer: Layer, nlp: JumpNLP, P: np.ndarray, t: np.ndarray, base: np.ndarray,
-                  x_L: float, takeoff: float, touchdown: float) -> np.ndarray:
-    """The training start (module doc) of ``nlp`` from the path's control points P, the captured
-    base (t, base) and the landing toe point x_L."""
+def takeoff_state(robot: JumpRobot, layer: Layer, spline: BSpline, P: np.ndarray, phases: Phases
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The closed legs (y, yd: n x 1) and the planted base (b, bd: 3 x 1) at takeoff of the path P."""
+    assert robot.closure is not None
+    t_to = np.array([phases.takeoff])
+    y, yd, ydd = _joint_motion(layer, spline, P, t_to)
+    yc, ydc, _, b, bd, _ = robot.closure.evaluate(y.T, yd.T, ydd.T, phases.held(t_to), np.zeros(1))
+    return yc.T, ydc.T, b.T, bd.T
+
+
+def initial_point(robot: JumpRobot, layer: Layer, nlp: JumpNLP, phases: Phases, P: np.ndarray, x_L: float) -> np.ndarray:
+    """The training start (module doc) of ``nlp`` from the path's control points P and the landing
+    toe point x_L."""
     var = nlp.variables
-    sp_, sps, spl = nlp.splines
-    st, la = t <= takeoff + 1e-9, t >= touchdown - 1e-9
-    base_s = sps.fit(t[st], base[st], fix_ends=False)
-    base_l = spl.fit(t[la] - touchdown, base[la], fix_ends=False)
-    # flight: the ballistic motion from the stance's state at takeoff
     fns = flight_functions(robot.sym, robot.smap)
-    t_to = np.array([takeoff])
-    y_to, yd_to, _ = _joint_motion(layer, sp_, P, t_to)
-    b_to, bd_to = (sps.evaluate(base_s, t_to, k).T for k in range(2))
+    y_to, yd_to, b_to, bd_to = takeoff_state(robot, layer, nlp.spline, P, phases)
     c, cd, L = (np.asarray(v).ravel() for v in fns["momentum"](y_to, yd_to, b_to, bd_to))
     tau_fine = nlp.tau_fine
-    Yf = _joint_motion(layer, sp_, P, takeoff + tau_fine)
+    Yf = _joint_motion(layer, nlp.spline, P, phases.takeoff + tau_fine)
     bb = ballistic_base(fns, Yf[0], Yf[1], Yf[2], tau_fine, b_to, bd_to, y_to, yd_to)
     nC = var.shapes["lam"][0]
-    x0 = var.pack({"P": P[1:-1], "base_stance": base_s, "base_land": base_l, "x_L": x_L,
-                   "lam": np.full((nC, EDGES), 1.0 / (2 * EDGES)), "lam_impact": np.full(EDGES, 0.5), "c_to": c, "cd_to": cd,
+    x0 = var.pack({"P": P[1:-1], "x_L": x_L, "lam": np.full((nC, EDGES), 1.0 / (2 * EDGES)), "c_to": c, "cd_to": cd,
                    "L_to": L, "pitch_flight": bb[0][2, ::nlp.flight_substeps]})
     return sample_values(nlp, balanced_forces(nlp, np.clip(x0, nlp.lbx, nlp.ubx)))
 

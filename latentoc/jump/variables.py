@@ -2,10 +2,8 @@
 
 * ``P``: the free control points of the latent (or joint) spline (the end points stay on the
   training path);
-* ``base_stance``, ``base_land``: the (x, z, pitch) base splines of the contact phases;
 * ``x_L``: the landing toe tip's ground point (the jump distance, Eq. 33);
 * ``lam``: friction-pyramid edge weights at the contact nodes (heel, ball, toe, pad; body weights);
-* ``lam_impact``: the touchdown impulse's edge weights (0.1 s of body weight);
 * ``c_to``, ``cd_to``, ``L_to``: the takeoff COM position, velocity and angular momentum;
 * ``pitch_flight``: the base pitch at the flight nodes;
 * ``lam_sample``: the contact samples' edge weights (:mod:`.selection`);
@@ -38,10 +36,9 @@ class JumpVariables:
         self.n = off
 
     @classmethod
-    def layout(cls, n_control: int, d: int, n_base_stance: int, n_base_land: int, n_contact: int,
-               n_flight: int, n_contact_samples: int = 0, n_flight_samples: int = 0) -> "JumpVariables":
-        return cls({"P": (n_control - 2, d), "base_stance": (n_base_stance, 3), "base_land": (n_base_land, 3),
-                    "x_L": (1,), "lam": (n_contact, EDGES), "lam_impact": (EDGES,), "c_to": (2,), "cd_to": (2,),
+    def layout(cls, n_control: int, d: int, n_contact: int, n_flight: int, n_contact_samples: int = 0,
+               n_flight_samples: int = 0) -> "JumpVariables":
+        return cls({"P": (n_control - 2, d), "x_L": (1,), "lam": (n_contact, EDGES), "c_to": (2,), "cd_to": (2,),
                     "L_to": (1,), "pitch_flight": (n_flight,), "lam_sample": (n_contact_samples, EDGES),
                     "flight_sample": (n_flight_samples, 4)})
 

@@ -2,7 +2,7 @@
 module (:mod:`.rows`) wires its block with.
 
 A :class:`Wiring` holds what every family needs (the robot, the GP or identity layer, the blocks, the phases,
-the settings, the selection, the variables and splines); :class:`Rows` picks a block's outputs at
+the settings, the selection, the variables and the path's spline); :class:`Rows` picks a block's outputs at
 its nodes as constraint rows, each with a name, a time and a component (the joint among the kept
 ones, the polygon edge, or the output's index), the row's identity across NLPs
 (:mod:`.warm`). :meth:`Wiring.add` turns them into a :class:`~latentoc.nlp.assemble.Family`.
@@ -67,7 +67,7 @@ class Wiring:
     settings: JumpSettings
     selection: Selection
     variables: JumpVariables
-    splines: tuple[BSpline, BSpline, BSpline]  # latent (or joint) path, stance base, landing base
+    spline: BSpline  # the latent (or joint) path's
     P_fixed: np.ndarray
     grid: dict[str, np.ndarray]
     families: list[Family] = field(default_factory=list)
@@ -83,22 +83,10 @@ class Wiring:
         return NodeInputs(K, self.n_w)
 
     def latent(self, ni: NodeInputs, t: np.ndarray, orders: int = 3) -> None:
-        """The path's value and time derivatives (``orders`` of them) at times t."""
-        ni.spline([self.splines[0].basis(t, k) for k in range(orders)], self.variables.latent_index(), self.P_fixed)
-
-    def base(self, ni: NodeInputs, t: np.ndarray, orders: int = 3) -> None:
-        """(b, bd, bdd) of the stance spline at times before touchdown and the landing's after."""
-        _, sps, spl = self.splines
-        touchdown = self.phases.touchdown
-        land = t >= touchdown - 1e-12
-        bases = []
-        for k in range(orders):
-            B = np.zeros((len(t), sps.n_control + spl.n_control))
-            B[~land, :sps.n_control] = sps.basis(np.clip(t[~land], 0, sps.duration), k)
-            B[land, sps.n_control:] = spl.basis(np.clip(t[land] - touchdown, 0, spl.duration), k)
-            bases.append(B)
-        index = np.vstack([self.variables.index("base_stance"), self.variables.index("base_land")])
-        ni.spline(bases, index, np.zeros(index.shape))
+        """The path's value and time derivatives (``orders`` of them) at times t, at an event from the
+        side of the phase it ends (:meth:`.phases.Phases.closing`)."""
+        left = self.phases.closing(t)
+        ni.spline([self.spline.basis(t, k, left) for k in range(orders)], self.variables.latent_index(), self.P_fixed)
 
     def add(self, name: str, ni: NodeInputs, rows: Rows, node_t: np.ndarray, L: sp.spmatrix | None = None) -> None:
         """Family ``name``: ``rows`` of its block at nodes ``ni`` (times ``node_t``), plus ``L w``."""

@@ -1,9 +1,9 @@
 """The broad jump's row families, one per module, each a robot block (:mod:`latentoc.nlp.blocks`):
 a Function of the joint motion (y, yd, ydd) and the node's other inputs r, never of the GPDM.
 
-* :mod:`.contact` - a contact node or sample: base rows = sum J^T f, torques, foot placement, ZMP, COM;
+* :mod:`.contact` - a contact node or sample: base rows = sum J^T f, torques, clearance, CoP, ZMP, COM;
 * :mod:`.flight` - the flight's inverse dynamics (at any time), foot clearance and pitch rate;
-* :mod:`.transitions` - the takeoff state and the touchdown with its inelastic impact;
+* :mod:`.transitions` - the takeoff state, the touchdown at rest and the hinge's switches;
 * :mod:`.tube` - the tube (Eq. 29), from the GP layer alone;
 * :mod:`.limits` - the robot's joint position and velocity limits (none for the CMU humanoid).
 
@@ -41,6 +41,8 @@ def row_blocks(robot: JumpRobot, d: int, joint_space: bool = False) -> dict[str,
     blocks = {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
               "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
               "takeoff": transitions.takeoff_block(robot, d), "touchdown": transitions.touchdown_block(robot, d)}
+    if robot.closure is not None and robot.closure.hinge is not None:
+        blocks["hinge"] = transitions.hinge_block(robot, d)
     if robot.has_joint_limits:
         blocks["joint_limits"] = limits.block(robot, d)
     return {k: replace(b, identity=True) for k, b in blocks.items()} if joint_space else blocks
@@ -51,4 +53,5 @@ def families() -> tuple:
     from . import contact, flight, limits, transitions, tube
 
     return (contact.wire_nodes, contact.wire_samples, transitions.wire_takeoff, flight.wire_pitch,
-            flight.wire_samples, flight.wire_clearance, transitions.wire_touchdown, tube.wire, limits.wire)
+            flight.wire_samples, flight.wire_clearance, transitions.wire_touchdown, transitions.wire_hinge, tube.wire,
+            limits.wire)

@@ -1,12 +1,13 @@
 """A contact node or sample of the stance or the landing (Eq. 3, 34-36).
 
-Inputs r: the base (b, bd, bdd) of the contact phase's own (x, z, pitch) spline, the toe tip's
-ground point x_pin, and the friction-pyramid edge weights lam (heel, ball, toe, pad; body weights).
-Rows: the sagittal base rows of RNEA minus sum J^T f (body weights), the joint torques, where
-the foot is (:func:`_placement_at`: the toe tip on its ground point, the heel, ball and pad heights,
-the loaded points' sideways offsets), the centre of pressure on
-the ground within the loaded support, the ZMP in the support polygon (both homogeneous in the
-normal force, smooth as fz -> 0) and the projected COM in it.
+Inputs r: the planted body's shift along x from its standing pose (0 in the stance, the jump in
+the landing), whether the heel body's hinge is held (:mod:`..closure`), and the friction-pyramid
+edge weights lam (heel, ball, toe, pad; body weights). The legs are closed and the base follows from
+the planted body (:meth:`~..robot.JumpRobot.planted`), so the loaded points stay on the ground by
+construction. Rows: the sagittal base rows of RNEA minus sum J^T f (body weights), the joint
+torques, the points' heights (an unloaded one above the ground), the centre of pressure on the
+ground within the loaded support, the ZMP in the support polygon (both homogeneous in the normal
+force, smooth as fz -> 0) and the projected COM in it.
 """
 from __future__ import annotations
 
@@ -14,14 +15,14 @@ import casadi as ca
 import numpy as np
 
 from ...nlp.blocks import RobotBlock
-from ..contact import EDGES, point_forces, point_generalized_force, toe_wrench
+from ..contact import EDGES, POINTS, point_forces, point_generalized_force, toe_wrench
 from ..robot import SAGITTAL_ROWS, JumpRobot, galilean
 from ..selection import POLYGON_EDGES
 from ..wiring import Rows, Wiring
 from ...support_polygon import symbolic_rows
 from . import inputs
 
-INPUTS = {"b": 3, "bd": 3, "bdd": 3, "x_pin": 1, "lam": EDGES}
+INPUTS = {"shift": 1, "held": 1, "lam": EDGES}
 
 
 def homogeneous_polygon_rows(heel, toe, p_scaled, s):
@@ -38,12 +39,13 @@ def homogeneous_polygon_rows(heel, toe, p_scaled, s):
 def block(robot: JumpRobot, d: int) -> RobotBlock:
     (y, yd, ydd, r), u = inputs(robot, INPUTS)
     W = robot.weight
-    b0, bd0 = galilean(u["b"], u["bd"])
-    q, v, a = robot.configuration(b0, bd0, u["bdd"], y, yd, ydd)
+    (yc, ydc, yddc), (b, bd, bdd) = robot.planted(y, yd, ydd, u["held"], u["shift"])
+    b0, bd0 = galilean(b, bd)
+    q, v, a = robot.configuration(b0, bd0, bdd, yc, ydc, yddc)
     tau = robot.sym.rnea(q, v, a)
     lam = u["lam"]
     gen = point_generalized_force(robot.sym, robot.geom, q, point_forces(lam * W, robot.mu))
-    P = robot.points(q, u["b"][:2])
+    P = robot.points(q, b[:2])
     w = toe_wrench(lam, P, robot.mu)  # body weights, moment about the toe tip
     fx, fz = w[0], w[2]
     my = w[4] + P[2, 2] * fx  # about the ground point below the toe tip: CoP x = toe_x - my / fz
@@ -53,12 +55,8 @@ def block(robot: JumpRobot, d: int) -> RobotBlock:
     parts = {
         "dynamics": (tau - gen)[SAGITTAL_ROWS] / W,
         "torque": robot.torque_rows((tau - gen)[6:]),
-        # heights above each point's standing height (the toe tip stands ~1 mm above the others)
-        "ball_height": P[2, 1] - float(fp[2, 1]),
-        "toe_position": ca.vertcat(P[0, 2] - u["x_pin"], P[2, 2] - float(fp[2, 2])),
-        "heel_height": P[2, 0] - float(fp[2, 0]),
-        "pad_height": P[2, 3] - float(fp[2, 3]),
-        "point_y": ca.vertcat(*[P[1, k] - float(fp[1, k]) for k in range(4)]),  # heel, ball, toe, pad sideways
+        # heel, ball, toe and pad above their standing heights (the toe tip stands ~1 mm above the others)
+        "height": ca.vertcat(*[P[2, k] - float(fp[2, k]) for k in range(len(POINTS))]),
         # the centre of pressure on the ground between the rearmost loaded point and the toe tip
         # (homogeneous in fz, >= 0): cop_front, and cop_heel / cop_ball / cop_pad by the schedule
         "cop_front": my,
@@ -67,7 +65,7 @@ def block(robot: JumpRobot, d: int) -> RobotBlock:
         "cop_pad": robot.geom.pad_setback * fz - my,
         # ZMP x = toe_x - my / fz (y = 0), as fz * rows(ZMP)
         "zmp_polygon": homogeneous_polygon_rows(heel, toe, ca.vertcat(toe[0] * fz - my, 0), fz),
-        "com_polygon": symbolic_rows(heel, toe)(robot.sym.com(q)[:2] + ca.vertcat(u["b"][0], 0)),
+        "com_polygon": symbolic_rows(heel, toe)(robot.sym.com(q)[:2] + ca.vertcat(b[0], 0)),
     }
     return RobotBlock.from_parts("jump_contact", (y, yd, ydd, r), parts, d)
 
@@ -91,55 +89,50 @@ def _rows_at(rows: Rows, w: Wiring, k: int, t: float, torque: np.ndarray, polygo
             rows.add(k, "com_polygon", subset=np.flatnonzero(com))
 
 
-def _placement_at(rows: Rows, w: Wiring, k: int, t: float) -> None:
-    """Where the foot is: the toe tip on its ground point (x, z), the heel and ball heights (bounds
-    by the schedule). With ``sticking`` one row more per degree of freedom the loaded points hold
-    (none redundant): while the ball is off the ground the pad's height (the toes lie flat on tip
-    and pad); the toe tip's and the rearmost loaded point's sideways offsets (the foot's or the toes'
-    yaw)."""
-    on = {p: bool(w.phases.loaded(p, np.array([t]))[0]) for p in ("heel", "ball", "pad")}
-    for part in ("ball_height", "toe_position", "heel_height"):
-        rows.add(k, part)
-    if not w.settings.sticking:
-        return
-    if not on["ball"]:
-        rows.add(k, "pad_height")
-    rear = next((i for i, p in ((0, "heel"), (1, "ball"), (3, "pad")) if on[p]), None)
-    rows.add(k, "point_y", subset=np.array([2] + ([rear] if rear is not None else [])))
+def _clearance_at(rows: Rows, w: Wiring, k: int, t: float) -> None:
+    """The unloaded points' heights (above the ground: :func:`latentoc.jump.nlp.build_nlp`'s bounds)."""
+    at = np.array([t])
+    unloaded = [i for i, p in enumerate(POINTS) if not w.phases.loaded(p, at)[0]]
+    if unloaded:
+        rows.add(k, "height", subset=np.array(unloaded))
+
+
+def _planted_inputs(w: Wiring, ni, t: np.ndarray) -> None:
+    """The planted body's shift (0 in the stance, the landing's x_L less the standing toe tip's x) and
+    whether the hinge is held, at contact times t."""
+    land = t >= w.phases.touchdown - 1e-9
+    x0 = w.robot.geom.toe_x
+    ni.variables(np.where(land, w.variables.index("x_L")[0], -1).astype(np.int64)[:, None], np.where(land, -x0, 0.0)[:, None])
+    ni.constant(w.phases.held(t).astype(float)[:, None])
 
 
 def wire_nodes(w: Wiring) -> None:
-    """The contact nodes: their own edge weights, the toe tip's ground point (the stance's at 0, the
-    landing's the jump distance x_L), the feet's placement and the chosen rows."""
+    """The contact nodes: their own edge weights, the planted body's ground pose (the stance's, or the
+    landing's at the jump distance x_L), the unloaded points' heights and the chosen rows."""
     ts, tl = w.grid["stance"], w.grid["land"]
     tc, var, sel = np.concatenate([ts, tl]), w.variables, w.selection
     ni = w.inputs(len(tc))
     w.latent(ni, tc)
-    w.base(ni, tc)
-    ni.variables(np.concatenate([-np.ones(len(ts), np.int64), np.full(len(tl), var.index("x_L")[0])])[:, None])
+    _planted_inputs(w, ni, tc)
     ni.variables(var.index("lam"))
     rows = Rows(w.blocks["contact"])
     for k, t in enumerate(tc):
         _rows_at(rows, w, k, t, sel.node_torque[k], sel.node_polygon[k])
-        _placement_at(rows, w, k, t)
+        _clearance_at(rows, w, k, t)
     w.add("contact", ni, rows, tc)
 
 
 def wire_samples(w: Wiring) -> None:
-    """The contact samples: the same block with their own edge weights; with ``sticking`` the nodes'
-    foot placement (the feet held between the nodes)."""
+    """The contact samples: the same block with their own edge weights and the unloaded points' heights."""
     sel = w.selection
     if not len(sel.contact):
         return
     ni = w.inputs(len(sel.contact))
     w.latent(ni, sel.contact)
-    w.base(ni, sel.contact)
-    land = sel.contact >= w.phases.touchdown - 1e-9  # the toe tip's ground point: 0, or x_L in the landing
-    ni.variables(np.where(land, w.variables.index("x_L")[0], -1).astype(np.int64)[:, None])
+    _planted_inputs(w, ni, sel.contact)
     ni.variables(w.variables.index("lam_sample"))
     rows = Rows(w.blocks["contact"])
     for k, t in enumerate(sel.contact):
         _rows_at(rows, w, k, t, sel.contact_torque[k], sel.contact_polygon[k])
-        if w.settings.sticking:  # the feet held between the nodes too
-            _placement_at(rows, w, k, t)
+        _clearance_at(rows, w, k, t)
     w.add("contact_sample", ni, rows, sel.contact)
