@@ -193,6 +193,19 @@ def test_standing_box_contact_forces_carry_the_weight_without_slip():
     assert s["torque_excess"]["max"] == 0.0 and s["clamped_fraction"] == 0.0
 
 
+def test_torque_limits_that_do_not_fit_the_plan_are_refused_by_name():
+    """tau_min and tau_max of another length than the plan's joint torques: a SimulationError naming
+    them (the actuators' clamp and the excess report read them through one reader)."""
+    model, corners = _box()
+    n = 11
+    q = pin.neutral(model)
+    q[2] = 0.1
+    plan = {"t": np.arange(n) * 1e-3, "q": np.tile(q, (n, 1)), "v": np.zeros((n, model.nv)),
+            "tau": np.zeros((n, 1)), "tau_min": np.array([-2.0, -1.0]), "tau_max": np.array([2.0, 1.0])}
+    with pytest.raises(SimulationError, match=r"tau_min \(2,\) and tau_max \(2,\) do not fit the 1 joint torques"):
+        replay(model, plan, kp=10.0, contacts=corners, desc="test")
+
+
 def test_the_actuators_are_clamped_to_the_plans_torque_limits():
     """A plan asking 5 N m of the pendulum joint with limits of +-2 N m: MuJoCo's actuator gives 2 at
     the most (forcerange), every sample reports the clamp, and the pendulum swings as 2 N m drive it,

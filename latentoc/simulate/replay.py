@@ -145,7 +145,7 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
     m.actuator_biasprm[:] = 0.0
     m.actuator_biasprm[:, 1] = -g.kp
     m.actuator_biasprm[:, 2] = -(Kd + timestep * g.kp) if implicit else -Kd
-    bound = _limits(arrays, col)
+    bound = _actuator_bounds(arrays, col, tau_ff.shape[1])
     m.actuator_forcelimited[:] = np.isfinite(bound[0])  # an actuator gives no more than its joint's limit
     m.actuator_forcerange[:] = np.where(np.isfinite(bound), bound, 0.0).T
     spheres = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, f"contact{k}_{name}") for k, (name, _) in enumerate(contacts)]
@@ -192,14 +192,26 @@ def replay(model: pin.Model, arrays: Mapping[str, Any], kp: float, kd: float | N
     return sim
 
 
-def _limits(arrays: Mapping[str, Any], col: np.ndarray) -> np.ndarray:
-    """The plan's torque limits per actuator (2 x actuators: columns ``col`` of tau_min, tau_max);
-    -inf, inf where it has none or where they are a point (the joints a symmetric plan leaves unloaded)."""
+def _limits(arrays: Mapping[str, Any], n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The plan's torque limits (tau_min, tau_max as its n joint torques' columns) and which columns they
+    hold (a nonempty interval: not the joints a symmetric plan leaves unloaded, limits 0, 0); None
+    without limits."""
     if "tau_min" not in arrays or "tau_max" not in arrays:
+        return None
+    lo, hi = np.asarray(arrays["tau_min"], dtype=float), np.asarray(arrays["tau_max"], dtype=float)
+    if lo.shape != (n,) or hi.shape != (n,):
+        raise SimulationError(f"tau_min {lo.shape} and tau_max {hi.shape} do not fit the {n} joint torques")
+    return lo, hi, lo < hi
+
+
+def _actuator_bounds(arrays: Mapping[str, Any], col: np.ndarray, n: int) -> np.ndarray:
+    """Each actuator's force range (2 x actuators, columns ``col`` of the plan's limits): -inf, inf where
+    :func:`_limits` holds none."""
+    held = _limits(arrays, n)
+    if held is None:
         return np.vstack([np.full(len(col), -np.inf), np.full(len(col), np.inf)])
-    lo, hi = (np.asarray(arrays[k], dtype=float)[col] for k in ("tau_min", "tau_max"))
-    point = hi - lo <= 1e-6
-    return np.vstack([np.where(point, -np.inf, lo), np.where(point, np.inf, hi)])
+    lo, hi, on = (x[col] for x in held)
+    return np.vstack([np.where(on, lo, -np.inf), np.where(on, hi, np.inf)])
 
 
 def _sphere_forces(m: mujoco.MjModel, d: mujoco.MjData, spheres: list[int]) -> np.ndarray:
@@ -290,12 +302,10 @@ def _excess(tau: np.ndarray, arrays: Mapping[str, Any], names: Sequence[str]) ->
     """How far the applied torques leave [tau_min, tau_max]: the largest excess (N m), its joint and
     time, the fraction of samples with any joint over; None without limits. Columns whose interval
     is empty or a point (the joints a symmetric plan leaves unloaded: limits 0, 0) are not checked."""
-    if "tau_min" not in arrays or "tau_max" not in arrays:
+    held = _limits(arrays, tau.shape[1])
+    if held is None:
         return None
-    lo, hi = np.asarray(arrays["tau_min"], dtype=float), np.asarray(arrays["tau_max"], dtype=float)
-    if lo.shape != (tau.shape[1],) or hi.shape != (tau.shape[1],):
-        raise SimulationError(f"tau_min {lo.shape} and tau_max {hi.shape} do not fit the {tau.shape[1]} joint torques")
-    checked = lo < hi
+    lo, hi, checked = held
     over = np.where(checked, np.maximum(np.maximum(tau - hi, lo - tau), 0.0), 0.0)
     i, j = np.unravel_index(int(np.argmax(over)), over.shape)
     return {"max": float(over.max()), "joint": names[int(j)], "time_index": int(i),
