@@ -184,3 +184,25 @@ def test_model_and_motion_sizes_must_agree(arm):
     sym6 = SymbolicModel(pin.buildSampleModelManipulator())  # 6 joints, the GPDM gives 7
     with pytest.raises(ValueError, match="nq = nv = D"):
         latent_nlp(gp, sym6, SETTINGS, 0.05, t_train=t)
+
+
+def test_carried_multipliers_follow_their_rows_into_the_grown_nlp(arm):
+    """The exchange's warm start: each old row's multiplier lands on the new row that evaluates to
+    the same value at the same point (sigma^2, the GP mean, tau at the same time), new rows at zero."""
+    from latentoc.min_torque.exchange import carried_multipliers
+    from latentoc.min_torque.nlp import Samples
+
+    gp, _, sym, t = arm
+    settings = replace(SETTINGS, torque_limits=(50.0,))
+    old = latent_nlp(gp, sym, settings, 0.05, t_train=t)
+    extra = Samples(grid=np.array([0.3333, 1.7777]), torque=np.array([0.5555]))
+    new = latent_nlp(gp, sym, settings, 0.05, path=old.path, extra=extra)
+    lam = np.random.default_rng(3).normal(size=old.nlp.m)
+    carried = carried_multipliers(old, new, lam)
+    g_old, g_new = old.nlp.constraints(old.w0), new.nlp.constraints(new.w0)
+    assert new.nlp.m == old.nlp.m + 2 * 8 + 7  # a tube and 7 joint rows per grid time, 7 torque rows
+    hit = carried != 0.0
+    assert hit.sum() == old.nlp.m
+    order = np.argsort(lam)  # the old rows in the order of their (distinct) multipliers
+    new_rows = np.flatnonzero(hit)[np.argsort(carried[hit])]
+    np.testing.assert_allclose(g_new[new_rows], g_old[order], rtol=1e-12, atol=1e-12)

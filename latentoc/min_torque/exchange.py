@@ -4,7 +4,8 @@ The NLP holds the tube and the joint and velocity limits on its constraint grid 
 limits at its quadrature nodes. After a successful Ipopt run the motion is sampled on the 1 kHz
 grid (:func:`.export.sampled_motion`); the worst time of every stretch where it leaves the tube
 (by more than :data:`~latentoc.nlp.exchange.TUBE_TOL` of delta) or a limit (by more than
-:data:`LIMIT_TOL`) joins the NLP's nodes (:class:`.nlp.Samples`) and Ipopt resumes from the point,
+:data:`LIMIT_TOL`) joins the NLP's nodes (:class:`.nlp.Samples`) and Ipopt resumes from the point
+(the latent method warm, its multipliers carried to the same rows: :func:`carried_multipliers`),
 for at most :data:`EXCHANGE_ROUNDS` runs (the loop: :func:`latentoc.nlp.exchange.exchange_rounds`).
 """
 from __future__ import annotations
@@ -24,7 +25,7 @@ from ..results import convergence_entry
 from .export import Solved, sampled_motion
 from .nlp import MinTorqueNLP, Samples, ipopt_options
 
-__all__ = ["LIMIT_TOL", "EXCHANGE_ROUNDS", "violated_times", "solve_exchanged"]
+__all__ = ["LIMIT_TOL", "EXCHANGE_ROUNDS", "violated_times", "carried_multipliers", "solve_exchanged"]
 
 LIMIT_TOL = 1e-6  # rad and N m a 1 kHz sample may leave the joint and torque limits by
 EXCHANGE_ROUNDS = 8  # Ipopt runs at the most
@@ -65,9 +66,39 @@ def violated_times(nlp: MinTorqueNLP, motion: dict[str, np.ndarray], sigma2: np.
     return add, worst
 
 
-def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, x0: np.ndarray, verbose: bool) -> IpoptResult:
+def _row_keys(nlp: MinTorqueNLP) -> list[tuple[str, float, int]]:
+    """A key per constraint row, (family, time, component): the same row's in NLPs with more times."""
+    times = {"tube": nlp.grid_t, "joint_limits": nlp.grid_t, "velocity_limits": nlp.grid_t,
+             "torque": np.concatenate([nlp.quad_t, nlp.extra.torque])}
+    keys = []
+    for name, rows in nlp.rows.items():
+        n, t = rows.stop - rows.start, times.get(name, np.zeros(1))
+        per = n // len(t)
+        keys += [(name, round(float(t[i // per]), 9), i % per) for i in range(n)]
+    return keys
+
+
+def carried_multipliers(old: MinTorqueNLP, new: MinTorqueNLP, lam_g: np.ndarray) -> np.ndarray:
+    """``old``'s row multipliers in ``new``'s rows (zero for its new rows)."""
+    where = {k: i for i, k in enumerate(_row_keys(old))}
+    return np.array([lam_g[where[k]] if k in where else 0.0 for k in _row_keys(new)])
+
+
+def _resume(old: MinTorqueNLP, new: MinTorqueNLP, run: IpoptResult) -> np.ndarray | dict[str, np.ndarray]:
+    """The next round's start: the latent method's point with its multipliers carried (a warm start);
+    the joint-range baseline's point alone (its table's optima were found so)."""
+    if new.method == "joint-range":
+        return run.x
+    return {**run.multipliers(), "lam_g0": carried_multipliers(old, new, run.lam_g)}
+
+
+def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, start: np.ndarray | dict[str, np.ndarray],
+               verbose: bool) -> IpoptResult:
+    """Ipopt from ``start``: a point, or a warm start's point and multipliers."""
     options = ipopt_options(nlp, tol=problem.tol, max_iter=problem.max_iter, verbose=verbose)
-    return ipopt.solve(nlp.nlp, x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, options, hessian=problem.hessian,
+    warm = start if isinstance(start, dict) else None
+    x0 = warm["x0"] if warm is not None else start
+    return ipopt.solve(nlp.nlp, x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, options, warm=warm, hessian=problem.hessian,
                        desc=f"{problem.name} ({nlp.method})")
 
 
@@ -90,7 +121,7 @@ def solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild: Callable[[Samp
         return (add if add else None), worst
 
     kind = Exchange(solve=lambda nlp, x: _run_ipopt(problem, nlp, x, verbose), record=record, check=check,
-                    grow=lambda nlp, add: rebuild(nlp.extra.merged(add)), resume=lambda old, new, run: run.x)
+                    grow=lambda nlp, add: rebuild(nlp.extra.merged(add)), resume=_resume)
     nlp, run, rounds = exchange_rounds(nlp, x0, kind, EXCHANGE_ROUNDS)
     convergence = [convergence_entry(nlp.method, k + 1, r.pop("history")) for k, r in enumerate(rounds)]
     return Solved(nlp, run, rounds, convergence)
