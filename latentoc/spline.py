@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import BSpline as _ScipyBSpline
 
 from .errors import LatentocError
 
@@ -22,6 +21,30 @@ __all__ = ["BSpline", "SplineInputError"]
 
 class SplineInputError(LatentocError, ValueError):
     """Spline settings or data that cannot be used."""
+
+
+def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """num / den with 0 where den = 0 (a repeated knot's empty interval)."""
+    return np.divide(num, den, out=np.zeros(np.broadcast(num, den).shape), where=den != 0)
+
+
+def _basis(knots: np.ndarray, degree: int, t: np.ndarray, derivative: int) -> np.ndarray:
+    """The r-th derivatives of every degree-p basis function at t (len(t) x (len(knots) - p - 1)),
+    by the Cox-de Boor recursion, each knot interval closed on the left, the last also on the right;
+    derivatives by d/dt B_(i,p) = p (B_(i,p-1) / (k_(i+p) - k_i) - B_(i+1,p-1) / (k_(i+p+1) - k_(i+1)))."""
+    k = np.asarray(knots, float)
+    last = int(np.flatnonzero(k[1:] > k[:-1])[-1])  # the last non-empty interval holds t = k[-1]
+    B = ((k[None, :-1] <= t[:, None]) & (t[:, None] < k[None, 1:])).astype(float)
+    B[t >= k[-1], last] = 1.0
+    for p in range(1, degree + 1):
+        lo, hi = k[:-p - 1], k[p + 1:]  # k_i and k_(i+p+1) of the len(k) - p - 1 functions
+        a, b = k[p:-1], k[1:-p]  # k_(i+p) and k_(i+1)
+        if p > degree - derivative:  # a derivative's step: constant coefficients
+            B = p * (_ratio(B[:, :-1], (a - lo)[None, :]) - _ratio(B[:, 1:], (hi - b)[None, :]))
+        else:
+            B = _ratio((t[:, None] - lo) * B[:, :-1], (a - lo)[None, :]) \
+                + _ratio((hi - t[:, None]) * B[:, 1:], (hi - b)[None, :])
+    return B
 
 
 @dataclass(frozen=True)
@@ -88,12 +111,7 @@ class BSpline:
             raise SplineInputError(f"spline times must lie in [0, {self.duration}]")
         t = np.clip(t, 0.0, self.duration)
         t = np.where(np.asarray(left, bool) & (t > 0), np.nextafter(t, -np.inf), t)
-        eye = np.eye(self.n_control)
-        spline = _ScipyBSpline(self.knots, eye, self.degree, extrapolate=False)
-        if derivative:
-            spline = spline.derivative(derivative)
-        B = spline(t)
-        return np.nan_to_num(B, nan=0.0)
+        return _basis(self.knots, self.degree, t, int(derivative))
 
     def evaluate(self, P: np.ndarray, t: np.ndarray, derivative: int = 0) -> np.ndarray:
         """``x(t)`` (or its derivative) for control points ``P`` (m x d): array (len(t) x d)."""

@@ -105,3 +105,29 @@ def test_phased_spline_refuses_events_and_counts_that_do_not_fit():
         BSpline.phased(1.0, [0.4], [1, 1], [4])
     with pytest.raises(SplineInputError, match="interior knots"):
         BSpline(8, 1.0, inner=(0.5,))
+
+
+@pytest.mark.parametrize("spline", [BSpline(9, 2.9), BSpline(7, 1.0, 2), BSpline(5, 2.0, 1),
+                                    BSpline.phased(1.3, [0.4, 0.6], [3, 2, 4], [2, 2]),
+                                    BSpline.phased(1.3, [0.4, 0.6, 0.9], [3, 2, 4, 2], [2, 1, 3])])
+def test_basis_equals_scipys_de_boor_evaluation(spline):
+    """Every derivative scipy defines (it refuses those beyond a repeated knot's continuity), at
+    even times, at every knot and at random times, from the right and from the left."""
+    from scipy.interpolate import BSpline as ScipyBSpline
+
+    k = spline.knots
+    t = np.concatenate([np.linspace(0, spline.duration, 301), np.unique(k),
+                        np.random.default_rng(0).uniform(0, spline.duration, 50)])
+    ref = ScipyBSpline(k, np.eye(spline.n_control), spline.degree, extrapolate=False)
+    compared = 0
+    for r in range(spline.degree + 1):
+        try:
+            fn = ref.derivative(r) if r else ref
+        except ValueError:
+            continue
+        for left in (False, True):
+            tt = np.where(left & (t > 0), np.nextafter(t, -np.inf), t)
+            want = np.nan_to_num(fn(tt), nan=0.0)
+            np.testing.assert_allclose(spline.basis(t, r, left), want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))
+            compared += 1
+    assert compared >= 4

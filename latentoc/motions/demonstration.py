@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.interpolate import CubicSpline
 
 from ..robots.human_arm import arm_trial
 from ..robots.human_models import broad_jump_training_motion
@@ -199,6 +198,8 @@ def _uniform_time(raw: RawMotion, rate: float | None) -> tuple[np.ndarray, np.nd
                               f"{MAX_SAMPLES} samples; give a lower rate")
     n = max(2, int(round(span * target)) + 1)
     grid = np.linspace(0.0, span, n)
+    from scipy.interpolate import CubicSpline  # here: its import is 0.1 s of every command that reads a motion
+
     try:
         with np.errstate(all="ignore"):
             values = CubicSpline(t - t[0], raw.values, axis=0)(grid)
