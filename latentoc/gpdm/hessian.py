@@ -38,9 +38,8 @@ def _rbf_direction(t: KernelTerm, dX: np.ndarray, l1: float, l2: float) -> tuple
     return S, a
 
 
-def _dG(t: KernelTerm, dK: np.ndarray, dT: np.ndarray | None, profiled_n: int | None,
-        PdKP: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """dG = -c/2 K^-1 dK K^-1 - 1/2 (dB B^T + B dB^T) and dB (module doc); ``PdKP`` K^-1 dK K^-1 if known."""
+def _dG(t: KernelTerm, dK: np.ndarray, dT: np.ndarray | None, profiled_n: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """dG = -c/2 K^-1 dK K^-1 - 1/2 (dB B^T + B dB^T) and dB (module doc)."""
     C = dK @ t.B
     dB = t.P @ C
     dB *= -1.0
@@ -48,7 +47,7 @@ def _dG(t: KernelTerm, dK: np.ndarray, dT: np.ndarray | None, profiled_n: int | 
         dB += t.P @ dT
     if profiled_n is not None:  # d ln w_d = b_d^T dK b_d / (2N)
         dB += t.B * (np.sum(t.B * C, axis=0) / (2.0 * profiled_n))[None, :]
-    dG = t.P @ dK @ t.P if PdKP is None else PdKP.copy()
+    dG = t.P @ dK @ t.P
     dG *= -0.5 * t.c
     BdB = dB @ t.B.T
     dG -= 0.5 * BdB
@@ -57,8 +56,7 @@ def _dG(t: KernelTerm, dK: np.ndarray, dT: np.ndarray | None, profiled_n: int | 
 
 
 def _term_hvp(t: KernelTerm, dX: np.ndarray, l1: float, l2: float, l_lin: float, l_noise: float,
-              dT: np.ndarray | None, profiled_n: int | None,
-              PdKP: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              dT: np.ndarray | None, profiled_n: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The derivative of one kernel term's gradient along a direction: (points, [ln s1, ln s2, ln lin,
     ln noise] entries, dB)."""
     S, a = _rbf_direction(t, dX, l1, l2)
@@ -67,7 +65,7 @@ def _term_hvp(t: KernelTerm, dX: np.ndarray, l1: float, l2: float, l_lin: float,
         XdX = dX @ t.X.T
         dK += t.lin * (XdX + XdX.T + l_lin * (t.X @ t.X.T))
     dK[np.diag_indices_from(dK)] -= l_noise / t.noise
-    dG, dB = _dG(t, dK, dT, profiled_n, PdKP)
+    dG, dB = _dG(t, dK, dT, profiled_n)
     del dK
     M2 = t.G * S
     M2 += dG
@@ -116,63 +114,112 @@ def _point_blocks(t: KernelTerm, profiled_n: int | None) -> tuple[dict[tuple[int
     a of point i with coordinate b of point j. Also K^-1 U_a and U_a B, U_a the rows dK/dx_ia
     (:func:`hessian`)."""
     X, P, B, G, s2, lin, c = t.X, t.P, t.B, t.G, t.s2, t.lin, t.c
-    d = X.shape[1]
-    U, MD = [], []  # U_a = dK_i./dx_ia by rows; M o Delta_a
+    n, d = X.shape
+    Delta = [X[:, a][:, None] - X[:, a][None, :] for a in range(d)]
+    Us = np.empty((d * n, n))  # U_a = dK_i./dx_ia by rows, stacked
     for a in range(d):
-        Delta = X[:, a][:, None] - X[:, a][None, :]
-        MD.append(t.M * Delta)
-        u = t.E * Delta
+        u = Us[a * n:(a + 1) * n]
+        np.multiply(t.E, Delta[a], out=u)
         u *= -s2
         if lin:
             u += lin * X[:, a][None, :]
-        U.append(u)
-    Z = [u @ P for u in U]  # row i: (K^-1 u_ia)^T
-    ZT = [np.ascontiguousarray(z.T) for z in Z]
-    UB = [u @ B for u in U]
-    UC = [ub @ B.T for ub in UB]
-    W = [np.ascontiguousarray(uc.T) - c * zt for uc, zt in zip(UC, ZT)]  # (C U_b^T - c K^-1 U_b^T)
+    Zs, UBs = Us @ P, Us @ B
+    Z = [Zs[a * n:(a + 1) * n] for a in range(d)]  # row i: (K^-1 u_ia)^T
+    UB = [UBs[a * n:(a + 1) * n] for a in range(d)]
+    UCs = UBs @ B.T
+    UC = [UCs[a * n:(a + 1) * n] for a in range(d)]
+    W = [uc.T - c * z.T for uc, z in zip(UC, Z)]  # (C U_b^T - c K^-1 U_b^T)
+    G2 = -2.0 * G
+    # G's contraction with the kernel's own second derivatives: 2 s2 M o (delta_ab - s2 Delta_a Delta_b) off
+    # the diagonal, minus its row sums on it
+    MD = [t.M * (-2.0 * s2 * s2) * D for D in Delta]
+    M2 = (2.0 * s2) * t.M
+    if lin:
+        Glin = (2.0 * lin) * G
     F = [B * ub for ub in UB] if profiled_n is not None else []
+    Fs = [(-2.0 / float(profiled_n)) * f for f in F] if F else []  # type: ignore[arg-type]
+    tmp = np.empty((n, n))
     blocks = {}
     for a in range(d):
+        ZU = Z[a] @ Us[a * n:].T  # K^-1 u_ia . u_jb for b >= a: one product
         for b in range(a, d):
             blk = Z[a] * W[b]
-            blk += ZT[b] * UC[a]
-            blk -= 2.0 * G * (Z[a] @ U[b].T)
-            blk += P * (UB[a] @ UB[b].T)
-            # G's contraction with the kernel's own second derivatives: 2 s2 M o (delta_ab - s2 Delta_a Delta_b)
-            # off the diagonal, minus its row sums on it
-            Fab = MD[a] * (X[:, b][:, None] - X[:, b][None, :])
-            Fab *= -s2
+            blk += np.multiply(Z[b].T, UC[a], out=tmp)
+            np.multiply(ZU[:, (b - a) * n:(b - a + 1) * n], G2, out=tmp)
+            blk += tmp
+            np.matmul(UB[a], UB[b].T, out=tmp)
+            tmp *= P
+            blk += tmp
+            np.multiply(MD[a], Delta[b], out=tmp)
             if a == b:
-                Fab += t.M
-            Fab[np.diag_indices_from(Fab)] -= np.sum(Fab, axis=1)
-            Fab *= 2.0 * s2
-            blk += Fab
+                tmp += M2
+            tmp[np.diag_indices(n)] -= np.sum(tmp, axis=1)
+            blk += tmp
             if a == b and lin:
-                blk += 2.0 * lin * G
+                blk += Glin
             if F:  # the profiled W
-                blk -= (2.0 / float(profiled_n)) * (F[a] @ F[b].T)  # type: ignore[arg-type]
+                blk += np.matmul(Fs[a], F[b].T, out=tmp)
             blocks[a, b] = blk
     return blocks, Z, UB
 
 
 def _hyper_columns(t: KernelTerm, profiled_n: int | None) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """(points, hyper entries) of the Hessian's columns for ln s1, ln s2, ln lin, ln noise of one term;
-    K^-1 dK K^-1 from K^-1 K K^-1 = K^-1 where it can."""
-    P, X = t.P, t.X
+    """(points, hyper entries, dB) of the Hessian's columns for ln s1, ln s2, ln lin, ln noise of one term:
+    :func:`_term_hvp` along each with dX = 0, where dK is E, -s2/2 R2 o E, lin X X^T and -I/noise; their
+    dK B side by side take one product with K^-1, and K^-1 dK K^-1 comes from K^-1 K K^-1 = K^-1."""
+    P, X, B, G, E, M, s2, lin = t.P, t.X, t.B, t.G, t.E, t.M, t.s2, t.lin
+    c = B.shape[1]
+    RE = t.R2 * E
+    RE *= -0.5 * s2  # dK along ln s2
     P2 = P @ P
     PX = P @ X
-    PXXP = t.lin * (PX @ PX.T)
-    PEP = P - PXXP - P2 / t.noise
-    PR2EP = P @ (t.R2 * t.E) @ P
-    PR2EP *= -0.5 * t.s2
-    zero = np.zeros_like(X)
+    PXXP = lin * (PX @ PX.T)
+    PdKP = (P - PXXP - P2 / t.noise, P @ RE @ P, PXXP, P2 / -t.noise)
+    C = np.hstack([E @ B, RE @ B, lin * (X @ (X.T @ B)), B / -t.noise])  # dK B for the four
+    dB = P @ C
+    dB *= -1.0
+    if profiled_n is not None:  # d ln w_d = b_d^T dK b_d / (2N)
+        Bs = np.tile(B, 4)
+        dB += Bs * (np.sum(Bs * C, axis=0) / (2.0 * profiled_n))[None, :]
+    GX = G @ X if lin else None
     out = []
-    for k, PdKP in enumerate((PEP, PR2EP, PXXP, -P2 / t.noise)):
-        e = np.zeros(4)
-        e[k] = 1.0
-        out.append(_term_hvp(t, zero, e[0], e[1], e[2], e[3], None, profiled_n, PdKP))
+    for k in range(4):
+        dBk = dB[:, k * c:(k + 1) * c]
+        BdB = dBk @ B.T
+        BdB *= 0.5
+        dG = PdKP[k] * (-0.5 * t.c)
+        dG -= BdB
+        dG -= BdB.T
+        M2 = dG * E  # (dG + G o S) o E, S = dK / E: 1 along ln s1, -s2/2 R2 along ln s2, else 0
+        if k == 0:
+            M2 += M
+        elif k == 1:
+            M2 += G * RE
+        gX = rbf_point_grad(M2, X, s2)
+        h = np.zeros(4)
+        h[0] = np.sum(M2)
+        h[1] = -0.5 * s2 * float(np.sum(M2 * t.R2))
+        h[3] = -np.trace(dG) / t.noise
+        if k == 1:
+            gX += rbf_point_grad(M, X, s2)
+            h[1] += -0.5 * s2 * float(np.sum(M * t.R2))
+        elif k == 3:
+            h[3] += np.trace(G) / t.noise
+        if lin:
+            dGX = dG @ X
+            h[2] = lin * float(np.sum(X * dGX))
+            if k == 2:
+                dGX += GX
+                h[2] += lin * float(np.sum(X * GX))
+            gX += 2.0 * lin * dGX
+        out.append((gX, h, dBk))
     return out
+
+
+def _block(rows: slice | None, cols: slice | None, row_idx: np.ndarray,
+           col_idx: np.ndarray) -> tuple[slice, slice] | tuple[np.ndarray, ...]:
+    """The index of the block (rows, cols): two slices where both are ranges, else np.ix_ of the indices."""
+    return (rows, cols) if rows is not None and cols is not None else np.ix_(row_idx, col_idx)
 
 
 def hessian(ev: Evaluation, hyper: np.ndarray | None = None) -> np.ndarray:
@@ -196,24 +243,25 @@ def hessian(ev: Evaluation, hyper: np.ndarray | None = None) -> np.ndarray:
     H = np.zeros((m, m))  # point i coordinate a at row i d + a, then the kept hyperparameters
     obs, _, _ = _point_blocks(ev.obs, N if ev.profiled else None)
     dyn, Z, UB = _point_blocks(ev.dyn, None)
-    i_in, i_out = np.ix_(p.in_idx, p.in_idx), np.ix_(p.in_idx, p.out_idx)
-    P, B = ev.dyn.P, ev.dyn.B
+    lamP, lamB = lam * ev.dyn.P, lam * ev.dyn.B
 
-    def cross(a: int, b: int) -> np.ndarray:  # rows (in i, a), columns (out j, b); each used once
-        return -(UB[a][:, b][:, None] * P + B[:, b][:, None] * Z[a])
+    def cross(a: int, b: int) -> np.ndarray:  # rows (in i, a), columns (out j, b), times lam
+        out = lamP * UB[a][:, b][:, None]
+        out += lamB[:, b][:, None] * Z[a]
+        out *= -1.0
+        return out
 
     for a in range(d):
         for b in range(a, d):
-            C = obs.pop((a, b))
-            T = np.zeros((N, N))  # the dynamics' blocks at their rows of X
-            T[i_in] = dyn.pop((a, b))
-            T[i_out] += cross(a, b)
-            T.T[i_out] += cross(b, a)
+            C = obs.pop((a, b))  # the dynamics' blocks added at their rows of X
+            dyn_ab = dyn.pop((a, b))
+            dyn_ab *= lam
+            C[_block(p.in_rows, p.in_rows, p.in_idx, p.in_idx)] += dyn_ab
+            C[_block(p.in_rows, p.out_rows, p.in_idx, p.out_idx)] += cross(a, b)
+            C[_block(p.out_rows, p.in_rows, p.out_idx, p.in_idx)] += cross(b, a).T
             if a == b:
-                T[np.ix_(p.out_idx, p.out_idx)] += P
-                T[p.first_idx, p.first_idx] += 1.0 / lam  # the first points' N(0, I) prior
-            T *= lam
-            C += T
+                C[_block(p.out_rows, p.out_rows, p.out_idx, p.out_idx)] += lamP
+                C[p.first_idx, p.first_idx] += 1.0  # the first points' N(0, I) prior
             H[a:n:d, b:n:d] = C
             if b != a:
                 H[b:n:d, a:n:d] = C.T

@@ -146,7 +146,9 @@ def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | No
     """
     if settings is not None:
         expect("learn_gpdm", "settings", settings, GPDMSettings, "a GPDMSettings or None")
-    return _learn(Y, GPDMSettings() if settings is None else settings, COARSE_ABOVE)
+    settings = GPDMSettings() if settings is None else settings
+    with blas_threads(settings.blas_threads):  # all of learning's linear algebra, its coarse levels and W included
+        return _learn(Y, settings, COARSE_ABOVE)
 
 
 def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_above: int) -> GPDM:
@@ -191,7 +193,7 @@ def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_
         return hessian(point.ev, free[n_free_x:])
 
     lower = np.r_[np.full(n_free_x, -np.inf), np.full(int(free[n_free_x:].sum()), -bound)]
-    with blas_threads(settings.blas_threads), bar(desc=f"GPDM on {N} frames", unit="it") as progress:
+    with bar(desc=f"GPDM on {N} frames", unit="it") as progress:
         def report_step(step: int, f: float, decrement: float) -> None:
             progress.update(1)
             progress.set_postfix_str(f"L = {f:.10g}, decrement {decrement:.2g}")  # each iteration shown

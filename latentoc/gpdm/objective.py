@@ -80,6 +80,13 @@ def sequence_indices(sequence_lengths: list[int]) -> tuple[np.ndarray, np.ndarra
             np.asarray(firsts, dtype=int))
 
 
+def _as_slice(idx: np.ndarray) -> slice | None:
+    """Indices that are a contiguous range as a slice (indexing by it is a view, not a copy), else None."""
+    if idx.size and np.all(np.diff(idx) == 1):
+        return slice(int(idx[0]), int(idx[-1]) + 1)
+    return None
+
+
 @dataclass
 class GPDMProblem:
     """Fixed data of one learning problem: centred data and sequence structure."""
@@ -94,10 +101,13 @@ class GPDMProblem:
     in_idx: np.ndarray = field(init=False)
     out_idx: np.ndarray = field(init=False)
     first_idx: np.ndarray = field(init=False)
+    in_rows: slice | None = field(init=False)  # in_idx, out_idx as slices where they are ranges (one sequence)
+    out_rows: slice | None = field(init=False)
 
     def __post_init__(self) -> None:
         self.Y = np.asarray(self.Y, dtype=float)
         self.in_idx, self.out_idx, self.first_idx = sequence_indices(self.sequence_lengths)
+        self.in_rows, self.out_rows = _as_slice(self.in_idx), _as_slice(self.out_idx)
         self.prior_shape = np.zeros(7) if self.prior_shape is None else np.asarray(self.prior_shape, float)
         self.prior_rate = np.zeros(7) if self.prior_rate is None else np.asarray(self.prior_rate, float)
         if self.prior_shape.shape != (7,) or self.prior_rate.shape != (7,):
@@ -169,15 +179,19 @@ class KernelTerm:
     lin: float  # alpha_3 (the linear part's weight; 0 for K_Y)
 
 
-def _kernel(X: np.ndarray, s1: float, s2: float, lin: float, noise: float) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
-    """R2, E, 1/2 ln|K| and K^-1 of K = s1 exp(-s2/2 R2) + lin X X^T + I/noise (Eq. 11, 15)."""
-    R2 = sq_dist(X)
+def _kernel(X: np.ndarray, s1: float, s2: float, lin: float, noise: float,
+            R2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """R2, E, 1/2 ln|K| and K^-1 of K = s1 exp(-s2/2 R2) + lin X X^T + I/noise (Eq. 11, 15); R2 if known."""
+    R2 = sq_dist(X) if R2 is None else R2
     E = R2 * (-0.5 * s2)
     np.exp(E, out=E)
     E *= s1
-    K = E.copy()
     if lin:
-        K += lin * (X @ X.T)
+        K = X @ X.T
+        K *= lin
+        K += E
+    else:
+        K = E.copy()
     K[np.diag_indices_from(K)] += 1.0 / noise
     L, _ = safe_cholesky(K)
     del K
@@ -244,7 +258,8 @@ def evaluate(v: np.ndarray, problem: GPDMProblem, w: np.ndarray | None = None) -
     a1, a2, a3, a4 = (float(a) for a in alpha)
     Xin = X[problem.in_idx]
     Xout = X[problem.out_idx]
-    R2, E, half_logdet_X, P = _kernel(Xin, a1, a2, a3, a4)
+    rows = problem.in_rows  # one sequence: X_in's distances are a block of X's
+    R2, E, half_logdet_X, P = _kernel(Xin, a1, a2, a3, a4, None if rows is None else obs.R2[rows, rows])
     BX = P @ Xout
     valX = d * half_logdet_X + 0.5 * float(np.sum(Xout * BX))
     dyn = _term(Xin, R2, E, P, BX, float(d), a2, a4, a3)
