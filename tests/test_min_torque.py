@@ -206,3 +206,26 @@ def test_carried_multipliers_follow_their_rows_into_the_grown_nlp(arm):
     order = np.argsort(lam)  # the old rows in the order of their (distinct) multipliers
     new_rows = np.flatnonzero(hit)[np.argsort(carried[hit])]
     np.testing.assert_allclose(g_new[new_rows], g_old[order], rtol=1e-12, atol=1e-12)
+
+
+def test_curvature_is_the_reduced_hessians_smallest_eigenvalue(arm):
+    """The second-order check against central differences of the NLP's gradient: with no active
+    row the objective's Hessian, with variables at their bounds its block of the free ones."""
+    from latentoc.nlp.curvature import curvature
+
+    gp, _, sym, t = arm
+    nlp = latent_nlp(gp, sym, SETTINGS, 1e3, t_train=t)  # a tube that does not bind at the start
+    w, n, m = nlp.w0, nlp.w0.size, nlp.nlp.m
+    h = 1e-5
+    H = np.array([(nlp.nlp.gradient(w + h * e) - nlp.nlp.gradient(w - h * e)) / (2 * h) for e in np.eye(n)])
+    H = (H + H.T) / 2
+    c = curvature(nlp.nlp, w, np.zeros(m), nlp.lbg, nlp.ubg, np.zeros(n), nlp.lbx, nlp.ubx)
+    e = np.linalg.eigvalsh(H)
+    assert c.active == 0 and abs(c.smallest - e[0]) <= 1e-6 * np.abs(e).max()
+    np.testing.assert_allclose(H @ c.direction, c.smallest * c.direction, atol=1e-5 * np.abs(e).max())
+    held = np.arange(n) % 3 == 0  # these variables at their (lower) bounds
+    lbx = np.where(held, w, -np.inf)
+    c = curvature(nlp.nlp, w, np.zeros(m), nlp.lbg, nlp.ubg, np.zeros(n), lbx, nlp.ubx)
+    free = ~held
+    assert c.active == held.sum() and np.all(c.direction[held] == pytest.approx(0.0, abs=1e-12))
+    assert abs(c.smallest - np.linalg.eigvalsh(H[np.ix_(free, free)])[0]) <= 1e-6 * np.abs(e).max()

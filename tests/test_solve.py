@@ -133,6 +133,9 @@ def test_arm_raise_5x_optimum(arm_raise):
     assert r.details["gpdm_objective"] == pytest.approx(-3272.72640, abs=1e-4)
     assert abs(r.gain_pct - 33.08) <= 0.05
     assert abs(r.cost - 627.3331) <= 1e-3 and abs(r.cost_initial - 937.4728) <= 1e-3
+    # a minimum, not a saddle: the optima form a ring about the latent path's axis (docs/arm-raise.md),
+    # so the reduced Hessian's smallest eigenvalue is 0 to rounding (its largest ~ 6.6e3)
+    assert abs(r.details["exchange_rounds"][-1]["reduced_hessian_min"]) <= 1e-6
 
 
 def test_tube_just_above_initial_keeps_the_training_path(arm_raise):

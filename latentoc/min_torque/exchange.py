@@ -19,6 +19,7 @@ import pinocchio as pin
 
 from ..nlp import ipopt
 from ..nlp.exchange import TUBE_TOL, Exchange, exchange_rounds
+from ..nlp.curvature import curvature
 from ..nlp.ipopt import IpoptResult
 from ..problem import Problem
 from ..results import convergence_entry
@@ -96,8 +97,7 @@ def _run_ipopt(problem: Problem, nlp: MinTorqueNLP, start: np.ndarray | dict[str
                verbose: bool) -> IpoptResult:
     """Ipopt from ``start``: a point, or a warm start's point and multipliers."""
     options = ipopt_options(nlp, tol=problem.tol, max_iter=problem.max_iter, verbose=verbose)
-    warm = start if isinstance(start, dict) else None
-    x0 = warm["x0"] if warm is not None else start
+    warm, x0 = (start, start["x0"]) if isinstance(start, dict) else (None, start)
     return ipopt.solve(nlp.nlp, x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, options, warm=warm, hessian=problem.hessian,
                        desc=f"{problem.name} ({nlp.method})")
 
@@ -108,7 +108,11 @@ def solve_exchanged(problem: Problem, nlp: MinTorqueNLP, rebuild: Callable[[Samp
     the 1 kHz grid t, add the violated times (``rebuild(extra)`` is the NLP with them) and resume
     from the point, until the grid holds (module doc)."""
     def record(nlp: MinTorqueNLP, run: IpoptResult) -> dict[str, Any]:
+        # the second-order condition: the reduced Hessian's smallest eigenvalue (>= 0 at a minimum)
+        c = curvature(nlp.nlp, run.x, run.lam_g, nlp.lbg, nlp.ubg, run.lam_x, nlp.lbx, nlp.ubx) \
+            if run.success else None
         return {"iterations": run.iterations, "time_s": run.time_s, "status": run.status,
+                "reduced_hessian_min": None if c is None else c.smallest,
                 "grid_points": int(len(nlp.grid_t)), "torque_points": int(len(nlp.quad_t) + len(nlp.extra.torque)),
                 "history": run.history}
 
