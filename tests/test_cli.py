@@ -170,3 +170,16 @@ def test_solve_summary_reports_the_contact_checks():
     assert (f"contact: loaded points travel {1e3 * checks['max_loaded_travel']:.2f} mm, height up to "
             f"{1e3 * checks['max_loaded_height']:.2f} mm, unloaded points down to "
             f"{1e3 * checks['min_unloaded_height']:.2f} mm; the ground's work 0 J positive, 0 J net") in text
+
+
+@pytest.mark.slow  # a fresh process and a solve
+def test_an_arm_solve_imports_neither_the_jump_nor_scipy_interpolate(tmp_path):
+    """What a fixed-base solve's start pays for: the jump package and scipy.interpolate (0.12 s with
+    the scipy.optimize it brings) are imported only by what uses them."""
+    code = ("import sys\nfrom latentoc.cli import main\n"
+            f"assert main(['solve', 'arm-raise-small', '--quiet', '--out', {str(tmp_path)!r}]) == 0\n"
+            "print(sorted(m for m in sys.modules if m.startswith(('latentoc.jump', 'scipy.interpolate', "
+            "'scipy.optimize'))))\n")
+    p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip().splitlines()[-1] == "[]"
