@@ -53,6 +53,7 @@ def test_residual_layer_against_casadi(gpdm):
     layer = ResidualLayer(gpdm, JOINTS)
     D, n = gpdm.output_dim, layer.latent_dim
     assert n == gpdm.latent_dim + len(JOINTS)
+    assert layer.latent_coordinates == gpdm.latent_dim and layer.gp.latent_coordinates == gpdm.latent_dim
     K = 5
     Z = _points(gpdm, K)
     rng = np.random.default_rng(6)

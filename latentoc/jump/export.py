@@ -16,6 +16,7 @@ import pinocchio as pin
 from scipy.optimize import nnls
 
 from ..latent.gp_layer import Layer
+from ..latent.residual_layer import ResidualLayer
 from .base import base_to_freeflyer
 from .contact import EDGES, POINTS, FootGeometry, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
 from .flight import ballistic_base, flight_functions
@@ -39,10 +40,10 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
     t = np.linspace(0.0, ph.duration, int(round(ph.duration * rate_hz)) + 1)
     X, Xd, Xdd = (nlp.spline.evaluate(P, t, k) for k in range(3))
     m = layer.motion(np.hstack([X, Xd, Xdd]))
-    d = getattr(layer, "d", X.shape[1])  # a leg residual's path: the latent coordinates first, then the residual
+    d = layer.latent_coordinates  # a leg residual's path: the latent coordinates first, then the residual
     path = {"sigma2": layer.variance(X)[0], "latent": X[:, :d]} if layer.has_tube else {}
-    if d < X.shape[1]:
-        path.update(leg_residual=X[:, d:], leg_residual_control_points=P[:, d:], leg_residual_joints=getattr(layer, "joints"))
+    if isinstance(layer, ResidualLayer):
+        path.update(leg_residual=X[:, d:], leg_residual_control_points=P[:, d:], leg_residual_joints=layer.joints)
     st, la = t <= ph.takeoff, t >= ph.touchdown
     fl = ~st & ~la
     Y, Yd, Ydd = m.y.copy(), m.yd.copy(), m.ydd.copy()

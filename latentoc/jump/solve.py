@@ -132,7 +132,7 @@ class _Solve:
             base = full.spline.fit(st["t"], st["base"])
             P, x_L, self.consistent = consistent_path(self.robot, self.layer, full.spline, self.ph, P, x_L,
                                                       lambda t: full.spline.evaluate(base, t, 2), s.tube,
-                                                      columns=getattr(self.layer, "d", None))
+                                                      columns=self.layer.latent_coordinates)
         x = initial_point(self.robot, self.layer, full, self.ph, P, x_L)
         self.lap("build_s")
         if not s.two_phase:

@@ -101,6 +101,12 @@ class Layer:
     output_dim: int
     has_tube = False  # whether the path has a GPDM variance sigma^2 to hold in the tube
 
+    @property
+    def latent_coordinates(self) -> int:
+        """The path's leading coordinates that are the latent (or joint) path itself: all of them,
+        except a residual's (:class:`~latentoc.latent.ResidualLayer`)."""
+        return self.latent_dim
+
     def motion(self, Z: np.ndarray) -> LatentMotion:
         raise NotImplementedError
 

@@ -29,6 +29,10 @@ class ResidualLayer(Layer):
         self.E = np.zeros((self.output_dim, self.r))
         self.E[self.joints, np.arange(self.r)] = 1.0
 
+    @property
+    def latent_coordinates(self) -> int:
+        return self.d
+
     def _parts(self, Z: np.ndarray):
         Z, X, Xd, Xdd = _split(Z, self.latent_dim)
         d = self.d
