@@ -198,7 +198,7 @@ def _uniform_time(raw: RawMotion, rate: float | None) -> tuple[np.ndarray, np.nd
                               f"{MAX_SAMPLES} samples; give a lower rate")
     n = max(2, int(round(span * target)) + 1)
     grid = np.linspace(0.0, span, n)
-    from scipy.interpolate import CubicSpline  # here: its import is 0.1 s of every command that reads a motion
+    from scipy.interpolate import CubicSpline  # here: only resampling needs it, and its import is slow
 
     try:
         with np.errstate(all="ignore"):

@@ -13,7 +13,7 @@ import numpy as np
 
 from .assemble import SparseNLP
 
-__all__ = ["MAX_DENSE", "Curvature", "dense_hessian", "curvature"]
+__all__ = ["MAX_DENSE", "Curvature", "curvature"]
 
 MAX_DENSE = 2000  # variables at most for the dense Hessian
 ACTIVE_TOL = 1e-6  # a row within this of its bound, or with a multiplier above it, is active
@@ -22,15 +22,14 @@ ACTIVE_TOL = 1e-6  # a row within this of its bound, or with a multiplier above 
 @dataclass
 class Curvature:
     """The smallest eigenvalue of the reduced Hessian, its direction (n, unit, its largest entry
-    positive), the largest |eigenvalue| there and the number of active rows and bounds."""
+    positive) and the number of active rows and bounds."""
 
     smallest: float
     direction: np.ndarray
-    scale: float
     active: int
 
 
-def dense_hessian(nlp: SparseNLP, w: np.ndarray, sigma: float, lam: np.ndarray) -> np.ndarray:
+def _dense_hessian(nlp: SparseNLP, w: np.ndarray, sigma: float, lam: np.ndarray) -> np.ndarray:
     """The symmetric Hessian of sigma f + lam . g at w, dense (n x n)."""
     if nlp.n_w > MAX_DENSE:
         raise ValueError(f"a dense Hessian of {nlp.n_w} variables: more than {MAX_DENSE}")
@@ -47,7 +46,7 @@ def curvature(nlp: SparseNLP, w: np.ndarray, lam_g: np.ndarray, lbg: np.ndarray,
     """The Lagrangian's Hessian at (w, lam_g) on the null space of the active rows and bounds (those
     at their bound or with a multiplier): Z^T H Z's smallest eigenvalue and its direction Z v."""
     n = nlp.n_w
-    H = dense_hessian(nlp, w, 1.0, lam_g)
+    H = _dense_hessian(nlp, w, 1.0, lam_g)
     g = nlp.constraints(w)
     rows = (np.minimum(g - lbg, ubg - g) <= ACTIVE_TOL) | (np.abs(lam_g) > ACTIVE_TOL)
     bounds = (np.minimum(w - lbx, ubx - w) <= ACTIVE_TOL) | (np.abs(lam_x) > ACTIVE_TOL)
@@ -57,8 +56,8 @@ def curvature(nlp: SparseNLP, w: np.ndarray, lam_g: np.ndarray, lbg: np.ndarray,
         _, s, vt = np.linalg.svd(A)
         Z = vt[int(np.sum(s > 1e-10 * max(s[0], 1.0))):].T
     if Z.shape[1] == 0:
-        return Curvature(np.inf, np.zeros(n), 0.0, len(A))
+        return Curvature(np.inf, np.zeros(n), len(A))
     e, V = np.linalg.eigh(Z.T @ H @ Z)
     d = Z @ V[:, 0]
     d = d if d[np.argmax(np.abs(d))] > 0 else -d  # a fixed sign
-    return Curvature(float(e[0]), d, float(np.max(np.abs(e))), len(A))
+    return Curvature(float(e[0]), d, len(A))
