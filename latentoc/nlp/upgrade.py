@@ -36,15 +36,19 @@ def start(index: Path, entry: dict, jobs: list[tuple[str, tuple[str, ...], str]]
     write ``entry`` (the index naming the optimised libraries) to ``index``."""
     cache = cache_dir()
     folder = Path(tempfile.mkdtemp(dir=cache, prefix=".upgrade-"))
-    for i, (source, _, _) in enumerate(jobs):
-        (folder / f"{i}.c").write_text(source)
-    plan = {"index": index.name, "entry": entry,
-            "jobs": [{"source": f"{i}.c", "flags": list(flags), "library": lib} for i, (_, flags, lib) in enumerate(jobs)]}
-    (folder / "plan.json").write_text(json.dumps(plan))
-    env = {**os.environ, "LATENTOC_CACHE": str(cache)}
-    _started.append(subprocess.Popen([sys.executable, "-m", "latentoc.nlp.upgrade", str(folder)], env=env,
-                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.DEVNULL, start_new_session=True))
+    try:
+        for i, (source, _, _) in enumerate(jobs):
+            (folder / f"{i}.c").write_text(source)
+        plan = {"index": index.name, "entry": entry,
+                "jobs": [{"source": f"{i}.c", "flags": list(flags), "library": lib} for i, (_, flags, lib) in enumerate(jobs)]}
+        (folder / "plan.json").write_text(json.dumps(plan))
+        env = {**os.environ, "LATENTOC_CACHE": str(cache)}
+        _started.append(subprocess.Popen([sys.executable, "-m", "latentoc.nlp.upgrade", str(folder)], env=env,
+                                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                         stderr=subprocess.DEVNULL, start_new_session=True))
+    except BaseException:  # a Ctrl-C before the process owns the folder leaves none behind
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
 
 
 def wait() -> None:
