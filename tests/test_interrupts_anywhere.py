@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 import latentoc
+from latentoc.nlp import upgrade
 
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("sigint_default")]
 
@@ -78,15 +79,6 @@ def _interrupt(args, shown, delay, env, timeout=300):
     return p.returncode, (out + rest_out).decode(), (err + rest_err).decode(), sent
 
 
-def _wait_for_upgrades(cache: str, timeout: float = 120) -> None:
-    """Wait until the detached -O1 compilations the run started in ``cache`` are done (each removes
-    its ``.upgrade-*`` folder last): a Ctrl-C does not reach them, by design (latentoc.nlp.upgrade)."""
-    t0 = time.time()
-    while list(Path(cache).glob(".upgrade-*")):
-        assert time.time() - t0 < timeout, f"a background compilation still runs in {cache}"
-        time.sleep(0.05)
-
-
 def _result_files(folder: Path) -> list[Path]:
     return [p for name in ("result.json", "sweep.json", "learn.json") for p in folder.rglob(name)]
 
@@ -100,7 +92,8 @@ def test_ctrl_c_anywhere_is_clean(tmp_path, place, delay):
             env.update(LATENTOC_CACHE=cache, LATENTOC_JIT="1")
         out = tmp_path / "o"
         code, stdout, stderr, sent = _interrupt(command(out), shown, delay, env)
-        _wait_for_upgrades(cache)
+        # a Ctrl-C does not reach the detached -O1 compilation the run may have started (by design)
+        assert upgrade.settle(Path(cache), timeout=120), f"a background compilation still runs in {cache}"
     noise = [word for word in NOISE if word in stdout + stderr]
     assert not noise, f"{noise}: exit {code}\n{stdout}\n{stderr}"
     leftovers = [p for p in tmp_path.rglob("*") if p.name.startswith(".") and p.name.endswith(".tmp")]

@@ -45,3 +45,21 @@ def test_a_large_piece_is_compiled_quickly_then_optimised_in_the_background(tmp_
     assert sorted(optimised.functions) == sorted(quick_block.functions)
     for a, b in zip(_values(quick_block), _values(optimised)):
         assert np.array_equal(a, b)
+
+
+def test_settle_waits_for_an_upgrade_it_did_not_start(tmp_path, monkeypatch):
+    """settle watches the cache, not this process's children: what a benchmark or a test needs once
+    a solve in a subprocess started the upgrade."""
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.delenv("LATENTOC_JIT", raising=False)
+    if jit.compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setattr(upgrade, "QUICK_FIRST", 0)
+    compile_blocks([_block()])
+    index = next(tmp_path.glob("rb_*.json"))
+    quick = json.loads(index.read_text())["libraries"]
+    assert list(tmp_path.glob(".upgrade-*"))  # the detached process is at work
+    assert upgrade.settle(tmp_path, timeout=120)
+    final = json.loads(index.read_text())["libraries"]  # settled: the index already names the -O1 ones
+    assert not set(final) & set(quick) and all(jit.cached_library(name) is not None for name in final)
+    upgrade.wait()

@@ -16,11 +16,12 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from .jit import JIT_FLAGS, build_library, cache_dir, compiler
 
-__all__ = ["QUICK_FIRST", "quick_first", "start", "wait"]
+__all__ = ["QUICK_FIRST", "quick_first", "settle", "start", "wait"]
 
 QUICK_FIRST = 10_000  # instructions from which a hot piece's first library is the quick one
 _started: list[subprocess.Popen] = []
@@ -55,6 +56,18 @@ def wait() -> None:
     """Wait for the background compilations this process started (benchmarks, tests)."""
     while _started:
         _started.pop().wait()
+
+
+def settle(cache: Path, timeout: float = 300.0) -> bool:
+    """Wait until the background compilations any process started in ``cache`` are done (each
+    removes its ``.upgrade-*`` folder last), at most ``timeout`` s: whether they are. Benchmarks and
+    tests call it before they time the next thing or remove the cache."""
+    t0 = time.monotonic()
+    while any(Path(cache).glob(".upgrade-*")):
+        if time.monotonic() - t0 > timeout:
+            return False
+        time.sleep(0.05)
+    return True
 
 
 def _run(folder: Path) -> None:
