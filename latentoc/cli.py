@@ -249,7 +249,9 @@ def main(argv: list[str] | None = None) -> int:
         session.start()
         args = _parser().parse_args(argv)
         set_quiet(was_quiet or getattr(args, "quiet", False))
-        return _command(args)(args)
+        code = _command(args)(args)
+        session.raise_swallowed()
+        return code
     except BaseException as exc:
         if session.interrupted(exc):  # also an error that a SIGINT caused inside C code or an import
             print("latentoc: interrupted", file=sys.stderr)

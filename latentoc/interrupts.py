@@ -11,8 +11,9 @@ error because of it (CasADi may turn it into a SystemError), raises KeyboardInte
 The command line (:class:`CommandLine`) owns SIGINT from the first line of ``python -m latentoc``:
 counted while its modules load, then the first one raises KeyboardInterrupt and later ones are
 only counted, so that the unwinding and the message are never interrupted; a KeyboardInterrupt
-lost inside a destructor is not printed and is raised again; once the result is written
-(:func:`finish`) Ctrl-C is ignored.
+lost inside a destructor is not printed and is raised again, and one a library caught on its way is
+raised before the result is written (:func:`finish`) or when the command returns; from
+:func:`finish` on Ctrl-C is ignored.
 """
 from __future__ import annotations
 
@@ -164,6 +165,12 @@ class CommandLine:
             _armed = False
             raise KeyboardInterrupt
 
+    def raise_swallowed(self) -> None:
+        """KeyboardInterrupt if a SIGINT came while the command ran and the KeyboardInterrupt it raised
+        was caught on its way (a library's bare ``except:``, say inside an import)."""
+        if _seen > self.baseline:
+            raise _interrupt()
+
     def interrupted(self, exc: BaseException) -> bool:
         """Whether ``exc`` ends the command because of Ctrl-C: a KeyboardInterrupt, or any error
         raised after a SIGINT (C code turns one into a SystemError, an import into an ImportError)."""
@@ -185,5 +192,7 @@ def finish() -> None:
     either interrupted with nothing written or ends with its result whole (command line only)."""
     global _armed
     if _main_thread() and signal.getsignal(signal.SIGINT) is _once:
+        if _seen > _baseline:  # a SIGINT whose KeyboardInterrupt was caught on its way: nothing is written
+            raise _interrupt()
         _armed = False
         signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -131,3 +131,36 @@ def test_sigint_inside_ipopt_exits_130_and_writes_nothing(tmp_path, command):
     assert "latentoc: interrupted" in stderr and "Traceback" not in stderr
     assert "NonIpopt" not in stdout and "gain" not in stdout
     assert not list(tmp_path.rglob("result.json")) and not list(tmp_path.rglob("sweep.json"))
+
+
+def test_an_interrupt_a_library_catches_before_the_solve_is_raised(tmp_path, capsys, monkeypatch):
+    """A SIGINT whose KeyboardInterrupt a library catches outside the solver (a bare ``except:`` in an
+    import, say) still ends the command: exit 130, nothing written, no result printed."""
+    import latentoc.problem_files as files
+
+    load = files.load_problem
+
+    def swallowing_load(*args, **kwargs):
+        _sigint_swallowed()
+        return load(*args, **kwargs)
+
+    monkeypatch.setattr(files, "load_problem", swallowing_load)
+    install(monkeypatch, lambda p, w: solution(p, 900.0))
+    out = tmp_path / "o"
+    assert main(["solve", "arm-raise-small", "--tube", "0.5", "--quiet", "--out", str(out)]) == 130
+    captured = capsys.readouterr()
+    assert captured.err.rstrip().endswith("latentoc: interrupted") and not out.exists()
+
+
+def test_an_interrupt_a_library_catches_in_a_command_that_writes_nothing_is_raised(capsys, monkeypatch):
+    import latentoc.problem_files as files
+
+    names = files.problem_names
+
+    def swallowing_names(*args, **kwargs):
+        _sigint_swallowed()
+        return names(*args, **kwargs)
+
+    monkeypatch.setattr(files, "problem_names", swallowing_names)
+    assert main(["list"]) == 130
+    assert capsys.readouterr().err.rstrip().endswith("latentoc: interrupted")
