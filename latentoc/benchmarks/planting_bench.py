@@ -64,7 +64,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
     Y_mu = _gp_motion(js, t)
     sb = BSpline(n_base, ph.takeoff)
     Bb = sb.basis(t)
-    stance = tr.t <= ph.takeoff + 1e-9
+    stance = ph.standing(tr.t)
     Pb = sb.fit(tr.t[stance], tr.base[stance])
     Pb0 = Pb.copy()
     Br = BSpline(n_res, ph.takeoff).basis(t) if n_res > 0 else np.zeros((len(t), 0))

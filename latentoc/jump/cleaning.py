@@ -92,8 +92,7 @@ def planted_training(model: pin.Model, smap: SymmetryMap, tr: JumpTraining, phas
                      geom: FootGeometry) -> PlantedTraining:
     """The training jump ``tr`` with its feet planted (module doc); ``geom``: the feet's points."""
     t, Q = tr.t, tr.Q
-    stance = t <= phases.takeoff + 1e-9
-    landing = t >= phases.touchdown - 1e-9
+    stance, landing = phases.standing(t), phases.landed(t)
     anchor, hinge = foot_bodies(model, geom)
     d = model.createData()
     fid = model.getFrameId(anchor)

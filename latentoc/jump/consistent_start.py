@@ -45,12 +45,10 @@ def consistent_path(robot: JumpRobot, layer: Layer, spline: BSpline, phases: Pha
     assert cl is not None
     T = ph.duration
     t = np.arange(0.0, T + 1e-9, SPACING)
-    con = (t <= ph.takeoff + 1e-9) | (t >= ph.touchdown - 1e-9)
-    tc = t[con]
-    land = tc >= ph.touchdown - 1e-9
+    tc = t[ph.on_ground(t)]
+    land = ph.landed(tc)
     target = np.asarray(base_acc(tc), float)
     held = ph.held(tc)
-    x0 = robot.geom.toe_x
     fns = flight_functions(robot.sym, robot.smap)
     i_to, i_td = int(np.argmin(np.abs(tc - ph.takeoff))), int(np.flatnonzero(land)[0])
     tf = np.linspace(0.0, ph.touchdown - ph.takeoff, 41)
@@ -69,7 +67,7 @@ def consistent_path(robot: JumpRobot, layer: Layer, spline: BSpline, phases: Pha
     def parts(v) -> dict[str, np.ndarray]:
         P, x_L = unpack(v)
         y, yd, ydd = _motion(layer, spline, P, tc)
-        shift = np.where(land, x_L - x0, 0.0)
+        shift = robot.geom.planted_shift(land, x_L)
         yc, ydc, _, b, bd, bdd = cl.evaluate(y, yd, ydd, held, shift)
         out = {"acc": (bdd - target).ravel() / G / np.sqrt(len(tc))}
         gaps = []

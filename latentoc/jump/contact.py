@@ -87,6 +87,12 @@ class FootGeometry:
         assert self.footprint is not None, "the toe tip's standing place is on the standing footprint"
         return float(self.footprint[0, 2])
 
+    def planted_shift(self, landed: np.ndarray, x_L: float) -> np.ndarray:
+        """How far the planted body stands along x from its standing place at contact times whose
+        ``landed`` flags are given: 0 in the stance, ``x_L`` less :attr:`toe_x` in the landing (the
+        rows wire the same, :func:`.rows.contact._planted_inputs`)."""
+        return np.where(landed, x_L - self.toe_x, 0.0)
+
     @property
     def heel_offset(self) -> np.ndarray:
         return self.offset("heel")

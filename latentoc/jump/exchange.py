@@ -115,8 +115,8 @@ def _node_rows(nlp: JumpNLP, w: np.ndarray, robot: JumpRobot, phases: Phases, m:
     torque = np.minimum(tau - lo, hi - tau) / robot.torque_scale[kept] < m.torque
     tc = np.concatenate([nlp.grid["stance"], nlp.grid["land"]])
     polygon = np.hstack([-F[:, layout["zmp_polygon"]], -F[:, layout["com_polygon"]]]) < m.polygon
-    polygon[tc < phases.touchdown - 1e-9] = False
-    polygon[tc < phases.settle - 1e-9, POLYGON_EDGES:] = False
+    polygon[~phases.landed(tc)] = False
+    polygon[~phases.settled(tc), POLYGON_EDGES:] = False
     return torque, polygon
 
 

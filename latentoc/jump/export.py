@@ -44,13 +44,13 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
     path = {"sigma2": layer.variance(X)[0], "latent": X[:, :d]} if layer.has_tube else {}
     if isinstance(layer, ResidualLayer):
         path.update(leg_residual=X[:, d:], leg_residual_control_points=P[:, d:], leg_residual_joints=layer.joints)
-    st, la = t <= ph.takeoff, t >= ph.touchdown
+    st, la = ph.standing(t), ph.landed(t)
     fl = ~st & ~la
     Y, Yd, Ydd = m.y.copy(), m.yd.copy(), m.ydd.copy()
     B = [np.zeros((len(t), 3)) for _ in range(3)]
     assert robot.closure is not None
     con = st | la
-    shift = np.where(la[con], float(parts["x_L"][0]) - robot.geom.toe_x, 0.0)
+    shift = robot.geom.planted_shift(la[con], float(parts["x_L"][0]))
     Y[con], Yd[con], Ydd[con], B[0][con], B[1][con], B[2][con] = robot.closure.evaluate(
         m.y[con], m.yd[con], m.ydd[con], ph.held(t[con]), shift)
     y_to, yd_to, b_to, bd_to = takeoff_state(robot, layer, nlp.spline, P, ph)
@@ -73,7 +73,7 @@ def trajectory(robot: JumpRobot, layer: Layer, phases: Phases, nlp: JumpNLP, w: 
     knot_t, knot_lam = knot_t[order], knot_lam[order]
     lam_t = np.zeros((len(t), EDGES))
     on_knot = np.zeros(len(t), bool)
-    for mask, inside in ((st, knot_t <= ph.takeoff + 1e-9), (la, knot_t >= ph.touchdown - 1e-9)):
+    for mask, inside in ((st, ph.standing(knot_t)), (la, ph.landed(knot_t))):
         for j in range(EDGES):
             lam_t[mask, j] = np.interp(t[mask], knot_t[inside], knot_lam[inside, j])
         near = np.abs(t[mask, None] - knot_t[inside][None, :]) < 1e-7

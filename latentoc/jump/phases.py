@@ -50,6 +50,22 @@ class Phases:
     heel_strike: float | None = None
     pad_with_ball: bool = False  # the pad on the ball's body (a rigid sole): loaded with the ball, not alone
 
+    def standing(self, t: np.ndarray) -> np.ndarray:
+        """Whether times ``t`` are in the stance, the takeoff included."""
+        return np.asarray(t, float) <= self.takeoff + 1e-9
+
+    def landed(self, t: np.ndarray) -> np.ndarray:
+        """Whether times ``t`` are in the landing, the touchdown included."""
+        return np.asarray(t, float) >= self.touchdown - 1e-9
+
+    def settled(self, t: np.ndarray) -> np.ndarray:
+        """Whether times ``t`` are at or after the landing's settle (the COM inside the feet)."""
+        return np.asarray(t, float) >= self.settle - 1e-9
+
+    def on_ground(self, t: np.ndarray) -> np.ndarray:
+        """Whether times ``t`` are in a contact phase (:meth:`standing` or :meth:`landed`)."""
+        return self.standing(t) | self.landed(t)
+
     def flat(self, t: np.ndarray) -> np.ndarray:
         """Whether the foot lies flat (the heel loaded) at contact times ``t``."""
         t = np.asarray(t, float)
@@ -72,9 +88,7 @@ class Phases:
     def held(self, t: np.ndarray) -> np.ndarray:
         """Whether the heel body's hinge holds its standing angle (the foot flat in contact) at times t
         (:mod:`.closure`)."""
-        t = np.asarray(t, float)
-        contact = (t <= self.takeoff + 1e-9) | (t >= self.touchdown - 1e-9)
-        return self.flat(t) & contact
+        return self.flat(t) & self.on_ground(t)
 
     def closing(self, t: np.ndarray) -> np.ndarray:
         """Whether contact times ``t`` end the phase before an event (the takeoff, the heel's lift-off):

@@ -128,7 +128,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 27, tor
     geom = robot.geometry(model, tr.Q[0])
     # a planted jump keeps the schedule it was planted to: its feet are planted exactly then
     phases = schedules[0] if planted is not None else training_phases(model, tr, geom, declared=schedule)
-    contact = (tr.t <= phases.takeoff + 1e-9) | (tr.t >= phases.touchdown - 1e-9)
+    contact = phases.on_ground(tr.t)
     loaded = np.column_stack([phases.loaded(k, tr.t) for k in POINTS])
     limits: TrainingDynamics | TorqueLimits = estimate_training_dynamics(
         model, smap, tr, geom, contact, margin=torque_margin, loaded=loaded, floor=torque_floor) \

@@ -81,11 +81,11 @@ def _rows_at(rows: Rows, w: Wiring, k: int, t: float, torque: np.ndarray, polygo
     rows.add(k, "cop_heel" if ph.loaded("heel", at)[0] else "cop_ball" if ph.loaded("ball", at)[0] else "cop_pad")
     if s.torque_limits and torque.any():
         rows.add(k, "torque", 1.0 / robot.torque_scale[kept[torque]], kept[torque])
-    if s.polygon and t >= ph.touchdown - 1e-9:
+    if s.polygon and ph.landed(t):
         zmp, com = polygon[:POLYGON_EDGES], polygon[POLYGON_EDGES:]
         if zmp.any():
             rows.add(k, "zmp_polygon", subset=np.flatnonzero(zmp))
-        if com.any() and t >= ph.settle - 1e-9:
+        if com.any() and ph.settled(t):
             rows.add(k, "com_polygon", subset=np.flatnonzero(com))
 
 
@@ -100,7 +100,7 @@ def _clearance_at(rows: Rows, w: Wiring, k: int, t: float) -> None:
 def _planted_inputs(w: Wiring, ni, t: np.ndarray) -> None:
     """The planted body's shift (0 in the stance, the landing's x_L less the standing toe tip's x) and
     whether the hinge is held, at contact times t."""
-    land = t >= w.phases.touchdown - 1e-9
+    land = w.phases.landed(t)
     x0 = w.robot.geom.toe_x
     ni.variables(np.where(land, w.variables.index("x_L")[0], -1).astype(np.int64)[:, None], np.where(land, -x0, 0.0)[:, None])
     ni.constant(w.phases.held(t).astype(float)[:, None])
