@@ -50,19 +50,19 @@ class Phases:
     heel_strike: float | None = None
     pad_with_ball: bool = False  # the pad on the ball's body (a rigid sole): loaded with the ball, not alone
 
-    def standing(self, t: np.ndarray) -> np.ndarray:
+    def standing(self, t: np.ndarray | float) -> np.ndarray:
         """Whether times ``t`` are in the stance, the takeoff included."""
         return np.asarray(t, float) <= self.takeoff + 1e-9
 
-    def landed(self, t: np.ndarray) -> np.ndarray:
+    def landed(self, t: np.ndarray | float) -> np.ndarray:
         """Whether times ``t`` are in the landing, the touchdown included."""
         return np.asarray(t, float) >= self.touchdown - 1e-9
 
-    def settled(self, t: np.ndarray) -> np.ndarray:
+    def settled(self, t: np.ndarray | float) -> np.ndarray:
         """Whether times ``t`` are at or after the landing's settle (the COM inside the feet)."""
         return np.asarray(t, float) >= self.settle - 1e-9
 
-    def on_ground(self, t: np.ndarray) -> np.ndarray:
+    def on_ground(self, t: np.ndarray | float) -> np.ndarray:
         """Whether times ``t`` are in a contact phase (:meth:`standing` or :meth:`landed`)."""
         return self.standing(t) | self.landed(t)
 
