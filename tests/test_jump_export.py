@@ -65,3 +65,21 @@ def test_exported_velocity_and_acceleration_are_derivatives_of_the_motion(small_
         y = small_jump.layer.motion(np.hstack([small_jump.nlp.spline.evaluate(tr["control_points"], t[[i]], k)
                                                for k in range(3)])).y[0]
         np.testing.assert_allclose(smap.to_learned(Q[i])[joints], y[joints], atol=1e-12)
+
+
+def test_the_toe_tip_stands_at_its_ground_point_in_both_contact_phases(small_jump, small_export):
+    """Numeric Pinocchio on the 1 kHz export: the left toe tip stands at its standing x in the stance
+    and at the landing's x_L from the touchdown on (Phases.standing/landed with the events' own
+    instants, FootGeometry.planted_shift)."""
+    from latentoc.jump.phases import toe_path
+
+    tr, ph, geom = small_export, small_jump.js.phases, small_jump.robot.geom
+    t = tr["t"]
+    assert ph.standing(ph.takeoff) and not ph.standing(ph.takeoff + 1e-6)
+    assert ph.landed(ph.touchdown) and not ph.landed(ph.touchdown - 1e-6)
+    assert ph.settled(ph.settle) and not ph.on_ground(0.5 * (ph.takeoff + ph.touchdown))
+    toe = toe_path(small_jump.js.model, tr["q"], geom)
+    x_L = float(small_jump.nlp.variables.unpack(small_jump.x0)["x_L"][0])
+    con = ph.on_ground(t)
+    np.testing.assert_allclose(toe[con, 0], geom.toe_x + geom.planted_shift(ph.landed(t[con]), x_L), atol=1e-9)
+    np.testing.assert_allclose(toe[ph.landed(t), 0], x_L, atol=1e-9)
