@@ -174,8 +174,8 @@ def test_solve_summary_reports_the_contact_checks():
 
 @pytest.mark.slow  # a fresh process and a solve
 def test_an_arm_solve_imports_neither_the_jump_nor_scipy_interpolate(tmp_path):
-    """What a fixed-base solve's start pays for: the jump package and scipy.interpolate (0.12 s with
-    the scipy.optimize it brings) are imported only by what uses them."""
+    """What a fixed-base solve's start pays for: the jump package and scipy.interpolate (with the
+    scipy.optimize it brings) are imported only by what uses them."""
     code = ("import sys\nfrom latentoc.cli import main\n"
             f"assert main(['solve', 'arm-raise-small', '--quiet', '--out', {str(tmp_path)!r}]) == 0\n"
             "print(sorted(m for m in sys.modules if m.startswith(('latentoc.jump', 'scipy.interpolate', "
