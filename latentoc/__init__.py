@@ -17,7 +17,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from .version import __version__
+from latentoc.version import __version__
 
 #: public name -> the module that defines it
 _WHERE = {"solve": "api", "SymbolicModel": "dynamics", "LatentocError": "errors", "GPDM": "gpdm",
@@ -42,12 +42,12 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
-    from .api import solve
-    from .dynamics import SymbolicModel
-    from .errors import LatentocError
-    from .gpdm import GPDM, GPDMSettings, learn_gpdm
-    from .problem import Problem
-    from .problem_files import load_problem, problem_names
-    from .results import Result, load_result
-    from .robots import load_robot
-    from .tube_sweep import SweepResult, sweep
+    from latentoc.api import solve
+    from latentoc.dynamics import SymbolicModel
+    from latentoc.errors import LatentocError
+    from latentoc.gpdm import GPDM, GPDMSettings, learn_gpdm
+    from latentoc.problem import Problem
+    from latentoc.problem_files import load_problem, problem_names
+    from latentoc.results import Result, load_result
+    from latentoc.robots import load_robot
+    from latentoc.tube_sweep import SweepResult, sweep

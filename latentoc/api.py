@@ -1,13 +1,13 @@
 """The public solve: a problem in, a :class:`~latentoc.results.Result` out (``latentoc.solve``)."""
 from __future__ import annotations
 
-from .arguments import expect
-from .gpdm import GPDM
-from .interrupts import watching
-from .kind import Solution
-from .kinds import kind_of
-from .problem import Problem
-from .results import Result
+from latentoc.arguments import expect
+from latentoc.gpdm import GPDM
+from latentoc.interrupts import watching
+from latentoc.kind import Solution
+from latentoc.kinds import kind_of
+from latentoc.problem import Problem
+from latentoc.results import Result
 
 __all__ = ["solve"]
 

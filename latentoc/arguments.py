@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .errors import ArgumentError
+from latentoc.errors import ArgumentError
 
 __all__ = ["expect"]
 

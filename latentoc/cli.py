@@ -22,8 +22,8 @@ import sys
 from pathlib import Path
 from typing import Any, Callable
 
-from .errors import LatentocError
-from .interrupts import CommandLine
+from latentoc.errors import LatentocError
+from latentoc.interrupts import CommandLine
 
 __all__ = ["main"]
 
@@ -241,7 +241,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code."""
-    from .progress import quiet, set_quiet
+    from latentoc.progress import quiet, set_quiet
 
     session = CommandLine()
     was_quiet = quiet()

@@ -13,10 +13,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .errors import LatentocError, SweepError
-from .files import check_out_dir
-from .interrupts import finish
-from .results import Result
+from latentoc.errors import LatentocError, SweepError
+from latentoc.files import check_out_dir
+from latentoc.interrupts import finish
+from latentoc.results import Result
 
 __all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
            "cmd_show", "cmd_solve", "cmd_sweep", "cmd_start_poses", "cmd_reproduce", "cmd_bench", "cmd_retarget"]
@@ -24,7 +24,7 @@ __all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_vie
 
 def tube_arg(text: str) -> float | str:
     """A tube given on the command line: a number (delta) or "<k>x" (module :mod:`latentoc.tube`)."""
-    from .tube import parse_tube
+    from latentoc.tube import parse_tube
 
     value, relative = parse_tube(text)  # ProblemError (a ValueError) -> argparse message
     return text if relative else value
@@ -39,7 +39,7 @@ def overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
 
 
 def cmd_learn(args: argparse.Namespace) -> int:
-    from .learned_motion import learn_file
+    from latentoc.learned_motion import learn_file
 
     if args.stride < 1 or args.latent_dim < 1:
         raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
@@ -65,7 +65,7 @@ def cmd_learn(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from .plots import plot_solution
+    from latentoc.plots import plot_solution
 
     paths = plot_solution(args.result, gif=not args.no_gif, out_dir=args.out, format=args.format)
     print(f"wrote {len(paths)} figures to {paths[0].parent}: " + ", ".join(p.name for p in paths))
@@ -73,7 +73,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    from .viewer import write_html
+    from latentoc.viewer import write_html
 
     if not args.rate > 0:
         raise LatentocError(f"--rate must be positive, got {args.rate}")
@@ -86,7 +86,7 @@ def cmd_notebooks(args: argparse.Namespace) -> int:
     import time
 
     try:
-        from .notebooks import check, notebook_paths, run_notebook
+        from latentoc.notebooks import check, notebook_paths, run_notebook
         import nbclient  # noqa: F401  (the dev extra's, with nbmake)
     except ImportError:
         raise LatentocError("running the notebooks needs nbclient: pip install -e '.[dev]'") from None
@@ -102,7 +102,7 @@ def cmd_notebooks(args: argparse.Namespace) -> int:
 
 
 def _warn_uncommitted(inputs: dict[str, str]) -> None:
-    from .provenance import uncommitted
+    from latentoc.provenance import uncommitted
 
     dirty = uncommitted(inputs)
     if dirty:
@@ -111,10 +111,10 @@ def _warn_uncommitted(inputs: dict[str, str]) -> None:
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from .problem import describe_problem
-    from .problem_files import load_problem, problem_names
+    from latentoc.problem import describe_problem
+    from latentoc.problem_files import load_problem, problem_names
     if args.robots:
-        from .robots import robot_names
+        from latentoc.robots import robot_names
         print("\n".join(robot_names()))
         return 0
     for name in problem_names():
@@ -124,8 +124,8 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from .problem import describe_problem
-    from .problem_files import load_problem
+    from latentoc.problem import describe_problem
+    from latentoc.problem_files import load_problem
     print(describe_problem(load_problem(args.problem)))
     return 0
 
@@ -168,14 +168,14 @@ def summary(r: Result) -> str:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from .api import solve
-    from .problem_files import load_problem
+    from latentoc.api import solve
+    from latentoc.problem_files import load_problem
 
     problem = load_problem(args.problem, **overrides(args, "tube", "latent_dim", "control_points", "hessian"))
     out = check_out_dir(args.out if args.out is not None else Path("out") / f"{problem.name}-{args.method}")
     gpdm = None
     if args.gpdm is not None:
-        from .learned_motion import load_gpdm_file
+        from latentoc.learned_motion import load_gpdm_file
         gpdm = load_gpdm_file(args.gpdm)
     r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose, gpdm=gpdm)
     print(summary(r))
@@ -187,7 +187,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     paths = r.save(out)
     print("  wrote " + ", ".join(str(p) for p in paths))
     if args.plots:
-        from .plots import plot_solution
+        from latentoc.plots import plot_solution
 
         figures = plot_solution(out, gif=True)
         print(f"  plots: {len(figures)} figures in {out / 'plots'}")
@@ -216,8 +216,8 @@ def _executor(args: argparse.Namespace) -> Any:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .problem_files import load_problem
-    from .tube_sweep import format_table, sweep, write_sweep
+    from latentoc.problem_files import load_problem
+    from latentoc.tube_sweep import format_table, sweep, write_sweep
 
     problem = load_problem(args.problem, **overrides(args, "latent_dim", "hessian"))
     if args.tubes == [] or args.ranges == []:
@@ -247,7 +247,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 "scheduler": args.scheduler, "warm_start": client is None and not args.cold}
         print("wrote " + ", ".join(str(p) for p in write_sweep(outcome, out, meta)))
     if args.plots and outcome.results:
-        from .plots import plot_gain_vs_tube, save
+        from latentoc.plots import plot_gain_vs_tube, save
 
         folder = out if out is not None else Path("out") / f"{problem.name}-sweep"
         print("wrote " + str(save(plot_gain_vs_tube(outcome.results, title=f"{problem.name}: gain vs tube"),
@@ -264,11 +264,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_start_poses(args: argparse.Namespace) -> int:
-    from .problem_files import load_problem
-    from .results import write_json
-    from .robots import load_robot
-    from .tube import tube_delta
-    from .start_poses import start_pose_distances
+    from latentoc.problem_files import load_problem
+    from latentoc.results import write_json
+    from latentoc.robots import load_robot
+    from latentoc.tube import tube_delta
+    from latentoc.start_poses import start_pose_distances
 
     problem = load_problem(args.problem, **overrides(args, "latent_dim"))
     if args.out is not None:
@@ -276,7 +276,7 @@ def cmd_start_poses(args: argparse.Namespace) -> int:
     if problem.kind != "latent-min-torque":
         raise LatentocError(f"start-poses is for latent-min-torque problems (Sect. 4.1.4), {problem.name!r} is "
                             f"a {problem.kind} problem")
-    from .min_torque.training import problem_gpdm
+    from latentoc.min_torque.training import problem_gpdm
 
     gp, _ = problem_gpdm(problem)
     specs = problem.start_pose_tubes if args.tubes is None else [tube_arg(t) for t in args.tubes]
@@ -298,11 +298,11 @@ def cmd_start_poses(args: argparse.Namespace) -> int:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from .reproduce import report, reproduce
-    from .results import atomic_write
+    from latentoc.reproduce import report, reproduce
+    from latentoc.results import atomic_write
 
     if args.figures:
-        from .readme_figures import make_figures
+        from latentoc.readme_figures import make_figures
 
         written = make_figures()
         print("wrote " + ", ".join(str(p) for p in written))
@@ -320,7 +320,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .benchmarks import arm_bench, blocks_bench, dynamics_bench, gpdm_bench, jump_bench, planting_bench, sampling_bench
+    from latentoc.benchmarks import arm_bench, blocks_bench, dynamics_bench, gpdm_bench, jump_bench, planting_bench, sampling_bench
 
     benchmarks = {"arm": arm_bench.main, "blocks": blocks_bench.main, "dynamics": dynamics_bench.main,
                   "gpdm": gpdm_bench.main, "jump": jump_bench.main, "planting": planting_bench.main,
@@ -336,8 +336,8 @@ def _source_motion(args: argparse.Namespace, model: Any) -> tuple[Any, Any]:
     NPZ whose q is the model's configuration), cut to ``--start``/``--stop``."""
     import numpy as np
 
-    from .mocap import motion_to_q, read_amc, read_asf
-    from .motions.readers import MotionFileError, read_npz
+    from latentoc.mocap import motion_to_q, read_amc, read_asf
+    from latentoc.motions.readers import MotionFileError, read_npz
 
     path = Path(args.motion)
     if not path.is_file():
@@ -369,10 +369,10 @@ def cmd_retarget(args: argparse.Namespace) -> int:
     import numpy as np
     import pinocchio as pin
 
-    from .files import atomic_write, dumps_json
-    from .motions.retarget_map import load_retarget_map
-    from .motions.retargeting import chain_scale, retarget
-    from .robots.catalog import load_robot
+    from latentoc.files import atomic_write, dumps_json
+    from latentoc.motions.retarget_map import load_retarget_map
+    from latentoc.motions.retargeting import chain_scale, retarget
+    from latentoc.robots.catalog import load_robot
 
     if Path(args.out).suffix != ".npz":
         raise LatentocError(f"--out: the retargeted motion is an .npz file, got {args.out}")

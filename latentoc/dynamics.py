@@ -19,7 +19,7 @@ import casadi
 import numpy as np
 import pinocchio
 
-from .errors import LatentocError
+from latentoc.errors import LatentocError
 
 __all__ = ["SymbolicModel", "available_backends", "DynamicsInputError"]
 

@@ -32,8 +32,8 @@ class Environment:
         import pinocchio
         import scipy
 
-        from .version import __version__
-        from .nlp.jit import threads
+        from latentoc.version import __version__
+        from latentoc.nlp.jit import threads
 
         return cls(latentoc=__version__, casadi=casadi.CasadiMeta.version(), pinocchio=getattr(pinocchio, "__version__", "?"),
                    numpy=np.__version__, python=platform.python_version(), cpu=cpu_name(),

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import LatentocError
+from latentoc.errors import LatentocError
 
 __all__ = ["OutputError", "NPZ_ERRORS", "atomic_write", "write_folder", "check_out_dir", "exclusive_lock", "dumps_json",
            "plain", "json_number", "sha256", "NON_FINITE"]

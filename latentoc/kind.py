@@ -26,10 +26,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from .errors import SolveError
-from .gpdm import GPDM
-from .problem import Problem
-from .schema import Schema
+from latentoc.errors import SolveError
+from latentoc.gpdm import GPDM
+from latentoc.problem import Problem
+from latentoc.schema import Schema
 
 __all__ = ["Kind", "Solution", "Solver", "TubeReference", "joint_range"]
 

@@ -9,10 +9,10 @@ import importlib
 from collections.abc import Iterator, MutableMapping
 from typing import TYPE_CHECKING
 
-from .errors import ProblemError
+from latentoc.errors import ProblemError
 
 if TYPE_CHECKING:
-    from .kind import Kind
+    from latentoc.kind import Kind
 
 __all__ = ["KINDS", "kind_of"]
 

@@ -25,12 +25,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .files import NPZ_ERRORS, dumps_json
-from .interrupts import finish
-from .gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
-from .motions import Demonstration, check_frames, demonstration_from_file
-from .results import GPDM_NAME, write_files
-from .robots import load_robot, load_urdf
+from latentoc.files import NPZ_ERRORS, dumps_json
+from latentoc.interrupts import finish
+from latentoc.gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
+from latentoc.motions import Demonstration, check_frames, demonstration_from_file
+from latentoc.results import GPDM_NAME, write_files
+from latentoc.robots import load_robot, load_urdf
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -120,7 +120,7 @@ def _variance_png(learned: LearnedMotion) -> bytes:
 
 def figures(learned: LearnedMotion, title: str) -> dict[str, bytes]:
     """The PNG figures by file name (module doc)."""
-    from .plots import plot_joint_curves, plot_latent_tube, save
+    from latentoc.plots import plot_joint_curves, plot_latent_tube, save
 
     g, demo = learned.gpdm, learned.demonstration
     out = {"variance.png": _variance_png(learned)}

@@ -17,8 +17,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from .errors import LatentocError
-from .provenance import ROOT, fingerprints, module_files, stale
+from latentoc.errors import LatentocError
+from latentoc.provenance import ROOT, fingerprints, module_files, stale
 
 __all__ = ["NOTEBOOKS", "notebook_paths", "cells_hash", "run_notebook", "check", "COMMAND"]
 

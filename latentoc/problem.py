@@ -14,8 +14,8 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import ProblemError, SolveError
-from .schema import Schema
+from latentoc.errors import ProblemError, SolveError
+from latentoc.schema import Schema
 
 __all__ = ["Problem", "check_name", "checked", "apply_overrides", "describe_problem"]
 

@@ -21,11 +21,11 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from .errors import ProblemError
-from .toml_limits import MAX_BYTES, toml_bounds_problem
-from .kinds import KINDS, kind_of
-from .paths import data_dir
-from .problem import Problem, check_name, checked
+from latentoc.errors import ProblemError
+from latentoc.toml_limits import MAX_BYTES, toml_bounds_problem
+from latentoc.kinds import KINDS, kind_of
+from latentoc.paths import data_dir
+from latentoc.problem import Problem, check_name, checked
 
 __all__ = ["load_problem", "problem_names", "problems_dir", "problem_from_dict"]
 

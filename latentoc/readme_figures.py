@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from .provenance import ROOT, Recorder
+from latentoc.provenance import ROOT, Recorder
 
 __all__ = ["IMAGES", "MANIFEST", "COMMAND", "make_figures", "image_problems"]
 
@@ -39,9 +39,9 @@ def make_figures(out: str | Path = ROOT / "docs" / "images") -> list[Path]:
 
     from matplotlib.figure import Figure
 
-    from .plots import DPI, plot_convergence, plot_latent_tube, save
-    from .viewer import write_html
-    from .viewer.still import still
+    from latentoc.plots import DPI, plot_convergence, plot_latent_tube, save
+    from latentoc.viewer import write_html
+    from latentoc.viewer.still import still
 
     out = Path(out)
     with Recorder() as rec, tempfile.TemporaryDirectory(prefix="latentoc-figures-") as tmp:
@@ -70,7 +70,7 @@ def make_figures(out: str | Path = ROOT / "docs" / "images") -> list[Path]:
 
 def image_problems(folder: str | Path = ROOT / "docs" / "images") -> list[str]:
     """Why the images in ``folder`` are not what the command makes from the current code (empty: current)."""
-    from .provenance import stale
+    from latentoc.provenance import stale
 
     folder = Path(folder)
     if not (folder / MANIFEST).is_file():

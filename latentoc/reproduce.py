@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from .environment import Environment
-from .problem_files import load_problem
-from .results import Result
+from latentoc.environment import Environment
+from latentoc.problem_files import load_problem
+from latentoc.results import Result
 
 __all__ = ["PAPER", "Reproduction", "reproduce", "report", "environment"]
 
@@ -98,11 +98,11 @@ class Reproduction:
 def reproduce(quick: bool = False, arm: str = "arm-raise", jump: str = "broad-jump",
               budgets: Sequence[float] = (10.0, 60.0, 300.0), say: Callable[[str], None] = print) -> Reproduction:
     """Run the experiments (module doc); ``quick``: the arm's tables and Fig. 5 only."""
-    from .min_torque.training import problem_gpdm
-    from .robots import load_robot
-    from .start_poses import start_pose_distances
-    from .tube_sweep import sweep
-    from .tube import resolve_tube
+    from latentoc.min_torque.training import problem_gpdm
+    from latentoc.robots import load_robot
+    from latentoc.start_poses import start_pose_distances
+    from latentoc.tube_sweep import sweep
+    from latentoc.tube import resolve_tube
 
     out = Reproduction()
     problem = load_problem(arm)
@@ -119,7 +119,7 @@ def reproduce(quick: bool = False, arm: str = "arm-raise", jump: str = "broad-ju
         out.skipped = {"table3": "not run (quick)", "table6": "not run (quick)"}
         return out
     try:
-        from .baselines.sampling import plan
+        from latentoc.baselines.sampling import plan
         say("Table 3: the sampling-based baseline")
         out.table3 = plan(problem, seconds=list(budgets))
     except ImportError as exc:

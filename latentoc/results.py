@@ -28,14 +28,14 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .environment import Environment
-from .errors import ResultFileError
-from .arguments import expect
-from .files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
-from .gpdm import GPDM
-from .kind import Solution
-from .problem import Problem
-from .tube import TubeResult
+from latentoc.environment import Environment
+from latentoc.errors import ResultFileError
+from latentoc.arguments import expect
+from latentoc.files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
+from latentoc.gpdm import GPDM
+from latentoc.kind import Solution
+from latentoc.problem import Problem
+from latentoc.tube import TubeResult
 
 __all__ = ["Result", "Times", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
            "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",

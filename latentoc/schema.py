@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import ProblemError
+from latentoc.errors import ProblemError
 
 __all__ = ["Check", "Setting", "Table", "Schema", "REQUIRED", "integer", "number", "boolean", "choice", "text",
            "list_of", "optional"]

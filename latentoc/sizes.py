@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-from .errors import ProblemError
+from latentoc.errors import ProblemError
 
 __all__ = ["physical_memory", "spline_transcription_bytes", "check_memory"]
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import LatentocError
+from latentoc.errors import LatentocError
 
 __all__ = ["BSpline", "SplineInputError"]
 

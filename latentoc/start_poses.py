@@ -20,9 +20,9 @@ from typing import Any, Sequence
 import numpy as np
 import pinocchio as pin
 
-from .errors import SolveError
+from latentoc.errors import SolveError
 
-from .gpdm import GPDM
+from latentoc.gpdm import GPDM
 
 __all__ = ["radial_direction", "tube_boundary_point", "start_pose_distances"]
 

@@ -20,9 +20,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .errors import ProblemError, SolveError
-from .gpdm import GPDM
-from .schema import Check
+from latentoc.errors import ProblemError, SolveError
+from latentoc.gpdm import GPDM
+from latentoc.schema import Check
 
 __all__ = ["parse_tube", "TUBE", "resolve_tube", "tube_delta", "relative_tube", "TubeResult"]
 

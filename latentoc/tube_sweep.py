@@ -33,15 +33,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .api import solve
-from .arguments import expect
-from .errors import ArgumentError, LatentocError, SweepError
-from .kinds import kind_of
-from .problem import Problem
-from .problem_files import problem_from_dict
-from .errors import ResultFileError
-from .results import RESULT_NAME, Result, atomic_write, load_result, write_files, write_json
-from .tube import parse_tube, resolve_tube
+from latentoc.api import solve
+from latentoc.arguments import expect
+from latentoc.errors import ArgumentError, LatentocError, SweepError
+from latentoc.kinds import kind_of
+from latentoc.problem import Problem
+from latentoc.problem_files import problem_from_dict
+from latentoc.errors import ResultFileError
+from latentoc.results import RESULT_NAME, Result, atomic_write, load_result, write_files, write_json
+from latentoc.tube import parse_tube, resolve_tube
 
 __all__ = ["SweepTask", "SweepFailure", "SweepResult", "sweep", "sweep_tasks", "run_task", "format_table",
            "write_sweep", "summary_row", "no_worse_than_start"]

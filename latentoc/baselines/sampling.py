@@ -41,11 +41,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError
-from ..min_torque.limits import torque_limit_vector
-from ..min_torque.training import training_frames
-from ..problem import Problem
-from ..robots import load_robot
+from latentoc.errors import LatentocError
+from latentoc.min_torque.limits import torque_limit_vector
+from latentoc.min_torque.training import training_frames
+from latentoc.problem import Problem
+from latentoc.robots import load_robot
 
 __all__ = ["EXTRA", "OmplUnavailable", "require_ompl", "SamplingSettings", "ArmTask", "HermiteEdges",
            "SamplingResult", "KinodynamicRRTStar", "plan", "hermite_samples", "check_motion"]

@@ -25,14 +25,14 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from ..jump.base import base_to_freeflyer
-from ..jump.cleaning import learned_leg
-from ..jump.contact import POINTS, foot_points, joint_embedding
-from ..jump.problem import setup
-from ..jump.torque_limits import contact_torques
-from ..kinematics import point_jacobian
-from ..latent.gp_layer import GPLayer
-from ..spline import BSpline
+from latentoc.jump.base import base_to_freeflyer
+from latentoc.jump.cleaning import learned_leg
+from latentoc.jump.contact import POINTS, foot_points, joint_embedding
+from latentoc.jump.problem import setup
+from latentoc.jump.torque_limits import contact_torques
+from latentoc.kinematics import point_jacobian
+from latentoc.latent.gp_layer import GPLayer
+from latentoc.spline import BSpline
 
 RATE = 1000.0
 PLANT_WEIGHT = 1e3  # per m of planting error, per point and 1 kHz sample

@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..files import NPZ_ERRORS, atomic_write, sha256
-from ..paths import cache_dir
-from .learning import learn_gpdm
-from .model import GPDM
-from .settings import GPDMSettings
+from latentoc.files import NPZ_ERRORS, atomic_write, sha256
+from latentoc.paths import cache_dir
+from latentoc.gpdm.learning import learn_gpdm
+from latentoc.gpdm.model import GPDM
+from latentoc.gpdm.settings import GPDMSettings
 
 __all__ = ["LEARNER_VERSION", "SHIPPED", "cached_gpdm", "model_path"]
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .objective import Evaluation, KernelTerm, rbf_point_grad
+from latentoc.gpdm.objective import Evaluation, KernelTerm, rbf_point_grad
 
 __all__ = ["hessian_vector"]
 

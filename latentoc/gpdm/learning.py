@@ -39,16 +39,16 @@ from typing import Sequence
 
 import numpy as np
 
-from ..arguments import expect
-from ..progress import bar
-from ..threads import blas_threads
-from .hessian import hessian
-from .newton import minimize_newton
-from .model import GPDM, LearningReport
-from .objective import HYPER_NAMES, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
-from .settings import GPDMInputError, GPDMSettings, check_settings
-from .size import check_size
-from .start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start
+from latentoc.arguments import expect
+from latentoc.progress import bar
+from latentoc.threads import blas_threads
+from latentoc.gpdm.hessian import hessian
+from latentoc.gpdm.newton import minimize_newton
+from latentoc.gpdm.model import GPDM, LearningReport
+from latentoc.gpdm.objective import HYPER_NAMES, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
+from latentoc.gpdm.settings import GPDMInputError, GPDMSettings, check_settings
+from latentoc.gpdm.size import check_size
+from latentoc.gpdm.start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start
 
 __all__ = ["learn_gpdm", "learning_problem", "prepare_data", "roughness"]
 

@@ -26,9 +26,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import solve_triangular
 
-from .kernels import rbf_linear_kernel
-from .objective import safe_cholesky, sequence_indices
-from .settings import GPDMSettings
+from latentoc.gpdm.kernels import rbf_linear_kernel
+from latentoc.gpdm.objective import safe_cholesky, sequence_indices
+from latentoc.gpdm.settings import GPDMSettings
 
 if TYPE_CHECKING:  # pragma: no cover
     import casadi

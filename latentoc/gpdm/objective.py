@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import lapack
 
-from .kernels import sq_dist
+from latentoc.gpdm.kernels import sq_dist
 
 __all__ = [
     "GPDMProblem",

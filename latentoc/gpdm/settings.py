@@ -8,8 +8,8 @@ from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
-from ..errors import LatentocError
-from .objective import HYPER_NAMES, KAPPA_SQ
+from latentoc.errors import LatentocError
+from latentoc.gpdm.objective import HYPER_NAMES, KAPPA_SQ
 
 __all__ = ["GPDMSettings", "GPDMInputError", "DEFAULT_FIXED", "DEFAULT_GAMMA", "check_settings"]
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import os
 
-from ..errors import LatentocError
+from latentoc.errors import LatentocError
 
 __all__ = ["GPDMSizeError", "available_memory", "check_size", "learning_memory"]
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .objective import HYPER_NAMES, pack
+from latentoc.gpdm.objective import HYPER_NAMES, pack
 
 __all__ = ["COARSE_ABOVE", "COARSE_DOWN_TO", "coarse_frames", "initial_variables", "interpolated_start", "pca_initialization"]
 

@@ -20,12 +20,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..mocap.symmetry import SymmetryMap
-from ..motions.planting import Plant, plant, taper
-from .base import base_to_freeflyer, freeflyer_to_base
-from .contact import POINTS, FootGeometry, point_joint
-from .phases import Phases
-from .training import JumpTraining
+from latentoc.mocap.symmetry import SymmetryMap
+from latentoc.motions.planting import Plant, plant, taper
+from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
+from latentoc.jump.contact import POINTS, FootGeometry, point_joint
+from latentoc.jump.phases import Phases
+from latentoc.jump.training import JumpTraining
 
 __all__ = ["PlantedTraining", "foot_bodies", "leg_joints", "learned_leg", "planted_training", "plantable"]
 

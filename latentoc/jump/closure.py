@@ -21,12 +21,12 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics import SymbolicModel
-from ..errors import ProblemError
-from ..mocap.symmetry import SymmetryMap
-from .base import _ry
-from .contact import FootGeometry, joint_embedding
-from .cleaning import foot_bodies, leg_joints
+from latentoc.dynamics import SymbolicModel
+from latentoc.errors import ProblemError
+from latentoc.mocap.symmetry import SymmetryMap
+from latentoc.jump.base import _ry
+from latentoc.jump.contact import FootGeometry, joint_embedding
+from latentoc.jump.cleaning import foot_bodies, leg_joints
 
 __all__ = ["LegClosure", "NEWTON_STEPS"]
 

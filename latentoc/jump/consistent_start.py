@@ -15,11 +15,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..latent.gp_layer import Layer
-from ..spline import BSpline
-from .flight import ballistic_base, flight_functions
-from .phases import Phases
-from .robot import JumpRobot
+from latentoc.latent.gp_layer import Layer
+from latentoc.spline import BSpline
+from latentoc.jump.flight import ballistic_base, flight_functions
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
 
 __all__ = ["consistent_path"]
 

@@ -29,9 +29,9 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics import SymbolicModel
-from ..kinematics import point_jacobian
-from ..mocap.symmetry import SymmetryMap
+from latentoc.dynamics import SymbolicModel
+from latentoc.kinematics import point_jacobian
+from latentoc.mocap.symmetry import SymmetryMap
 
 POINTS = ("heel", "ball", "toe", "pad")
 CMU_BODY = {"heel": 0, "ball": 1, "toe": 2, "pad": 2}  # a point's body among a foot's three in a CMU-layout result

@@ -18,14 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..nlp.evaluators import BlockEvaluator
-from ..nlp.exchange import TUBE_TOL, worst_times
-from .contact import POINTS
-from .nlp import JumpNLP
-from .phases import Phases
-from .robot import JumpRobot
-from .selection import POLYGON_EDGES, Selection
-from .settings import JumpSettings
+from latentoc.nlp.evaluators import BlockEvaluator
+from latentoc.nlp.exchange import TUBE_TOL, worst_times
+from latentoc.jump.contact import POINTS
+from latentoc.jump.nlp import JumpNLP
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.selection import POLYGON_EDGES, Selection
+from latentoc.jump.settings import JumpSettings
 
 __all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING"]
 

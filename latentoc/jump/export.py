@@ -15,15 +15,15 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import nnls
 
-from ..latent.gp_layer import Layer
-from ..latent.residual_layer import ResidualLayer
-from .base import base_to_freeflyer
-from .contact import EDGES, POINTS, FootGeometry, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
-from .flight import ballistic_base, flight_functions
-from .nlp import JumpNLP
-from .phases import Phases
-from .robot import JumpRobot
-from .start import takeoff_state
+from latentoc.latent.gp_layer import Layer
+from latentoc.latent.residual_layer import ResidualLayer
+from latentoc.jump.base import base_to_freeflyer
+from latentoc.jump.contact import EDGES, POINTS, FootGeometry, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
+from latentoc.jump.flight import ballistic_base, flight_functions
+from latentoc.jump.nlp import JumpNLP
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.start import takeoff_state
 
 __all__ = ["trajectory", "contact_geometry", "corrected_edge_weights"]
 

@@ -19,9 +19,9 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from ..dynamics import SymbolicModel
-from .base import _ry
-from .contact import joint_embedding
+from latentoc.dynamics import SymbolicModel
+from latentoc.jump.base import _ry
+from latentoc.jump.contact import joint_embedding
 
 GRAVITY = np.array([0.0, -9.81])  # (x, z)
 

@@ -5,9 +5,9 @@ Its schema, tube reference and solve are :mod:`.problem`'s; its NLP builder stay
 """
 from __future__ import annotations
 
-from ..kind import Kind
-from .path import METHODS
-from .problem import SCHEMA, solve_jump_problem, tube_reference
+from latentoc.kind import Kind
+from latentoc.jump.path import METHODS
+from latentoc.jump.problem import SCHEMA, solve_jump_problem, tube_reference
 
 __all__ = ["BROAD_JUMP"]
 

@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ProblemError
-from ..mocap.symmetry import MirrorError, SymmetryMap
-from ..robots.catalog import load_robot, robot_names
-from ..schema import Check, choice
-from .contact import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
+from latentoc.errors import ProblemError
+from latentoc.mocap.symmetry import MirrorError, SymmetryMap
+from latentoc.robots.catalog import load_robot, robot_names
+from latentoc.schema import Check, choice
+from latentoc.jump.contact import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
 
 __all__ = ["PointDeclaration", "RobotDeclaration", "CMU_HUMANOID", "ROBOT_KEYS", "declaration", "robot_model"]
 
@@ -210,7 +210,7 @@ def robot_model(decl: RobotDeclaration) -> tuple[pin.Model, SymmetryMap]:
     """The model and its joints' mirror: the CMU humanoid's from its skeleton, a URDF robot's from
     its joint names (:meth:`SymmetryMap.from_joint_names`)."""
     if decl.model == "cmu-humanoid":
-        from .training import jump_model
+        from latentoc.jump.training import jump_model
 
         return jump_model()
     model = load_robot(decl.model)

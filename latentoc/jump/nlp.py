@@ -28,19 +28,19 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..latent.gp_layer import Layer
-from ..nlp.assemble import SparseNLP
-from ..nlp.blocks import RobotBlock
-from ..spline import BSpline
-from .contact import EDGES, POINTS
-from .phases import Phases
-from .robot import JumpRobot
-from .rows import families, limits
-from .rows.flight import pitch_grid
-from .selection import Selection
-from .settings import JumpSettings
-from .variables import JumpVariables
-from .wiring import Wiring
+from latentoc.latent.gp_layer import Layer
+from latentoc.nlp.assemble import SparseNLP
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.spline import BSpline
+from latentoc.jump.contact import EDGES, POINTS
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.rows import families, limits
+from latentoc.jump.rows.flight import pitch_grid
+from latentoc.jump.selection import Selection
+from latentoc.jump.settings import JumpSettings
+from latentoc.jump.variables import JumpVariables
+from latentoc.jump.wiring import Wiring
 
 __all__ = ["JumpNLP", "build_nlp", "node_grid", "tube_times", "contact_sample_grid", "flight_sample_grid", "OBJECTIVES", "FORCE_REGULARISATION"]
 

@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gpdm import GPDM
-from ..spline import BSpline
-from ..latent.gp_layer import GPLayer, IdentityLayer, Layer
-from ..latent.residual_layer import ResidualLayer
+from latentoc.gpdm import GPDM
+from latentoc.spline import BSpline
+from latentoc.latent.gp_layer import GPLayer, IdentityLayer, Layer
+from latentoc.latent.residual_layer import ResidualLayer
 
 __all__ = ["JumpPath", "METHODS", "PATH_SMOOTHING", "initial_latent_path", "latent_path", "joint_range_path",
            "leg_residual_path"]

@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ProblemError
-from ..mocap.jumps import detect_jumps
-from ..spline import BSpline
-from .contact import POINTS, FootGeometry, foot_points, point_joint
-from .training import JumpTraining
+from latentoc.errors import ProblemError
+from latentoc.mocap.jumps import detect_jumps
+from latentoc.spline import BSpline
+from latentoc.jump.contact import POINTS, FootGeometry, foot_points, point_joint
+from latentoc.jump.training import JumpTraining
 
 CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
 

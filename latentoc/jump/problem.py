@@ -19,30 +19,30 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics import SymbolicModel
-from ..mocap.symmetry import SymmetryMap
-from ..errors import ProblemError, SolveError
-from ..gpdm import GPDM, GPDMSettings, cached_gpdm
-from ..latent.gp_layer import GPLayer, IdentityLayer, Layer
-from ..nlp.blocks import RobotBlock, compile_blocks
-from ..kind import Solution, joint_range
-from ..motions.problem_inputs import problem_dir
-from ..problem import Problem, apply_overrides
-from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
-from ..tube import TUBE, relative_tube, tube_delta
-from .base import base_to_freeflyer
-from .closure import LegClosure
-from .cleaning import PlantedTraining, learned_leg, plantable, planted_training
-from .contact import POINTS, FootGeometry
-from .path import METHODS, PATH_SMOOTHING, initial_latent_path, joint_range_path, latent_path, leg_residual_path
-from .phases import SCHEDULE_ORDER, Phases, toe_path, training_phases
-from .robot import JumpRobot
-from .rows import row_blocks
-from .settings import FIELD_DOCS, JumpSettings
-from .solve import JumpSolution, solve_jump
-from .torque_limits import TorqueLimits, TrainingDynamics, estimate_training_dynamics, urdf_torque_limits
-from .legged_robot import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
-from .training import JumpTraining, antisymmetric_centre, motion_training, training_jumps
+from latentoc.dynamics import SymbolicModel
+from latentoc.mocap.symmetry import SymmetryMap
+from latentoc.errors import ProblemError, SolveError
+from latentoc.gpdm import GPDM, GPDMSettings, cached_gpdm
+from latentoc.latent.gp_layer import GPLayer, IdentityLayer, Layer
+from latentoc.nlp.blocks import RobotBlock, compile_blocks
+from latentoc.kind import Solution, joint_range
+from latentoc.motions.problem_inputs import problem_dir
+from latentoc.problem import Problem, apply_overrides
+from latentoc.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
+from latentoc.tube import TUBE, relative_tube, tube_delta
+from latentoc.jump.base import base_to_freeflyer
+from latentoc.jump.closure import LegClosure
+from latentoc.jump.cleaning import PlantedTraining, learned_leg, plantable, planted_training
+from latentoc.jump.contact import POINTS, FootGeometry
+from latentoc.jump.path import METHODS, PATH_SMOOTHING, initial_latent_path, joint_range_path, latent_path, leg_residual_path
+from latentoc.jump.phases import SCHEDULE_ORDER, Phases, toe_path, training_phases
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.rows import row_blocks
+from latentoc.jump.settings import FIELD_DOCS, JumpSettings
+from latentoc.jump.solve import JumpSolution, solve_jump
+from latentoc.jump.torque_limits import TorqueLimits, TrainingDynamics, estimate_training_dynamics, urdf_torque_limits
+from latentoc.jump.legged_robot import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
+from latentoc.jump.training import JumpTraining, antisymmetric_centre, motion_training, training_jumps
 
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
            "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
@@ -330,7 +330,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     the Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =
     "warm+cold"`` the tube is also solved from the training fit and the better jump kept.
     ``overrides`` (tube, control_points, ...) change the problem's settings first."""
-    from .verify import verify
+    from latentoc.jump.verify import verify
 
     problem = apply_overrides(problem, overrides)
     k = _joint_range(problem, method, joint_range_deg)

@@ -12,14 +12,14 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from ..dynamics import SymbolicModel
-from ..min_torque.limits import Limits
-from ..mocap.symmetry import SymmetryMap
-from .base import base_function
-from .closure import LegClosure
-from .contact import POINTS, FootGeometry, joint_embedding, points_function
-from .torque_limits import TorqueLimits, TrainingDynamics
-from .zmp import G
+from latentoc.dynamics import SymbolicModel
+from latentoc.min_torque.limits import Limits
+from latentoc.mocap.symmetry import SymmetryMap
+from latentoc.jump.base import base_function
+from latentoc.jump.closure import LegClosure
+from latentoc.jump.contact import POINTS, FootGeometry, joint_embedding, points_function
+from latentoc.jump.torque_limits import TorqueLimits, TrainingDynamics
+from latentoc.jump.zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]  # x force, z force, y moment of the base rows
 

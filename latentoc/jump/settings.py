@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .contact import MU
+from latentoc.jump.contact import MU
 
 
 @dataclass

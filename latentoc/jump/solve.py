@@ -16,21 +16,21 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..latent.gp_layer import Layer
-from ..nlp import ipopt
-from ..nlp.blocks import RobotBlock
-from ..nlp.exchange import Exchange, exchange_rounds
-from . import exchange
-from .export import trajectory
-from .nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times
-from .phases import Phases
-from .robot import JumpRobot
-from .selection import Selection
-from .settings import JumpSettings
-from .consistent_start import consistent_path
-from .start import initial_point
-from .verify import series
-from .warm import carried_multipliers, carried_point
+from latentoc.latent.gp_layer import Layer
+from latentoc.nlp import ipopt
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.nlp.exchange import Exchange, exchange_rounds
+from latentoc.jump import exchange
+from latentoc.jump.export import trajectory
+from latentoc.jump.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.selection import Selection
+from latentoc.jump.settings import JumpSettings
+from latentoc.jump.consistent_start import consistent_path
+from latentoc.jump.start import initial_point
+from latentoc.jump.verify import series
+from latentoc.jump.warm import carried_multipliers, carried_point
 
 __all__ = ["JumpSolution", "solve_jump", "ipopt_options"]
 

@@ -12,13 +12,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
-from ..latent.gp_layer import Layer
-from ..spline import BSpline
-from .contact import EDGES
-from .flight import ballistic_base, flight_functions
-from .nlp import JumpNLP
-from .phases import Phases
-from .robot import JumpRobot
+from latentoc.latent.gp_layer import Layer
+from latentoc.spline import BSpline
+from latentoc.jump.contact import EDGES
+from latentoc.jump.flight import ballistic_base, flight_functions
+from latentoc.jump.nlp import JumpNLP
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
 
 __all__ = ["initial_point", "sample_values", "balanced_forces", "takeoff_state"]
 

@@ -20,11 +20,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import nnls
 
-from ..errors import ProblemError
-from ..spline import BSpline
-from .base import base_to_freeflyer
-from .contact import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
-from .training import JumpTraining
+from latentoc.errors import ProblemError
+from latentoc.spline import BSpline
+from latentoc.jump.base import base_to_freeflyer
+from latentoc.jump.contact import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
+from latentoc.jump.training import JumpTraining
 
 
 @dataclass

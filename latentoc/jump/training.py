@@ -21,13 +21,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..robots.human_models import broad_jump_sequences, cmu_skeleton
-from ..mocap.anthropometry import cmu_inertias
-from ..mocap.skeleton_model import build_model
-from ..mocap.symmetry import SymmetryMap, symmetrized_skeleton
-from ..motions.readers import MotionFileError, read_raw_motion
-from .base import base_to_freeflyer, freeflyer_to_base
-from .legged_robot import CMU_HUMANOID, RobotDeclaration
+from latentoc.robots.human_models import broad_jump_sequences, cmu_skeleton
+from latentoc.mocap.anthropometry import cmu_inertias
+from latentoc.mocap.skeleton_model import build_model
+from latentoc.mocap.symmetry import SymmetryMap, symmetrized_skeleton
+from latentoc.motions.readers import MotionFileError, read_raw_motion
+from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
+from latentoc.jump.legged_robot import CMU_HUMANOID, RobotDeclaration
 
 @lru_cache(maxsize=2)
 def jump_model(mass: float = 63.86, height: float = 1.75) -> tuple[pin.Model, SymmetryMap]:

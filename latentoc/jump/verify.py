@@ -44,12 +44,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .contact import MIRROR, POINTS, FootGeometry, foot_points, point_jacobians
-from ..intervals import runs
-from ..min_torque.limits import Limits
-from ..kinematics import point_jacobian
-from ..support_polygon import feet_polygon
-from .zmp import G, zmp
+from latentoc.jump.contact import MIRROR, POINTS, FootGeometry, foot_points, point_jacobians
+from latentoc.intervals import runs
+from latentoc.min_torque.limits import Limits
+from latentoc.kinematics import point_jacobian
+from latentoc.support_polygon import feet_polygon
+from latentoc.jump.zmp import G, zmp
 
 PAD_SETBACK = 0.01  # m: the pad's setback in results that do not record it (the CMU humanoid's)
 LOADED = 0.01  # of body weight: a point pushing harder than this is loaded

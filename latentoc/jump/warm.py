@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .nlp import JumpNLP
-from .start import sample_values
+from latentoc.jump.nlp import JumpNLP
+from latentoc.jump.start import sample_values
 
 __all__ = ["carried_point", "carried_multipliers", "row_keys"]
 

@@ -14,17 +14,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..latent.gp_layer import Layer
-from ..nlp.assemble import Family
-from ..nlp.blocks import RobotBlock
-from ..nlp.evaluators import BlockEvaluator
-from ..nlp.inputs import NodeInputs
-from ..spline import BSpline
-from .phases import Phases
-from .robot import JumpRobot
-from .selection import Selection
-from .settings import JumpSettings
-from .variables import JumpVariables
+from latentoc.latent.gp_layer import Layer
+from latentoc.nlp.assemble import Family
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.nlp.evaluators import BlockEvaluator
+from latentoc.nlp.inputs import NodeInputs
+from latentoc.spline import BSpline
+from latentoc.jump.phases import Phases
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.selection import Selection
+from latentoc.jump.settings import JumpSettings
+from latentoc.jump.variables import JumpVariables
 
 __all__ = ["Rows", "Wiring"]
 

@@ -43,8 +43,8 @@ from typing import Callable
 import numpy as np
 from scipy.linalg.blas import dtrmm
 
-from ..gpdm import GPDM
-from ..threads import one_blas_thread
+from latentoc.gpdm import GPDM
+from latentoc.threads import one_blas_thread
 
 __all__ = ["GPLayer", "IdentityLayer", "Layer", "LatentMotion"]
 

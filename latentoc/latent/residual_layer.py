@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gpdm import GPDM
-from .gp_layer import GPLayer, Layer, LatentMotion, _split
+from latentoc.gpdm import GPDM
+from latentoc.latent.gp_layer import GPLayer, Layer, LatentMotion, _split
 
 __all__ = ["ResidualLayer"]
 

@@ -17,14 +17,14 @@ import numpy as np
 import pinocchio as pin
 
 
-from ..nlp import ipopt
-from ..nlp.exchange import TUBE_TOL, Exchange, exchange_rounds
-from ..nlp.curvature import curvature
-from ..nlp.ipopt import IpoptResult
-from ..problem import Problem
-from ..results import convergence_entry
-from .export import Solved, sampled_motion
-from .nlp import MinTorqueNLP, Samples, ipopt_options
+from latentoc.nlp import ipopt
+from latentoc.nlp.exchange import TUBE_TOL, Exchange, exchange_rounds
+from latentoc.nlp.curvature import curvature
+from latentoc.nlp.ipopt import IpoptResult
+from latentoc.problem import Problem
+from latentoc.results import convergence_entry
+from latentoc.min_torque.export import Solved, sampled_motion
+from latentoc.min_torque.nlp import MinTorqueNLP, Samples, ipopt_options
 
 __all__ = ["LIMIT_TOL", "EXCHANGE_ROUNDS", "violated_times", "carried_multipliers", "solve_exchanged"]
 

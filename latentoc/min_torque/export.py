@@ -13,17 +13,17 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..latent import Layer
-from ..motions import Demonstration
-from ..nlp.ipopt import IpoptResult
-from ..problem import Problem
-from ..robots import describe_robot
-from ..spline import BSpline
-from ..spline_path import trapezoid_cost
-from .goal import goal_error
-from .nlp import MinTorqueNLP
-from .objectives import Objective
-from .settings import MinTorqueSettings
+from latentoc.latent import Layer
+from latentoc.motions import Demonstration
+from latentoc.nlp.ipopt import IpoptResult
+from latentoc.problem import Problem
+from latentoc.robots import describe_robot
+from latentoc.spline import BSpline
+from latentoc.spline_path import trapezoid_cost
+from latentoc.min_torque.goal import goal_error
+from latentoc.min_torque.nlp import MinTorqueNLP
+from latentoc.min_torque.objectives import Objective
+from latentoc.min_torque.settings import MinTorqueSettings
 
 __all__ = ["TRAJECTORY_RATE_HZ", "Solved", "time_grid", "sampled_motion", "motion_result"]
 

@@ -19,13 +19,13 @@ import numpy as np
 import pinocchio as pin
 import scipy.sparse as sp
 
-from ..dynamics import SymbolicModel
-from ..latent import Layer
-from ..nlp.assemble import Family
-from ..nlp.blocks import RobotBlock, block_inputs
-from ..nlp.evaluators import BlockEvaluator
-from ..nlp.inputs import NodeInputs
-from ..spline_path import SplinePath
+from latentoc.dynamics import SymbolicModel
+from latentoc.latent import Layer
+from latentoc.nlp.assemble import Family
+from latentoc.nlp.blocks import RobotBlock, block_inputs
+from latentoc.nlp.evaluators import BlockEvaluator
+from latentoc.nlp.inputs import NodeInputs
+from latentoc.spline_path import SplinePath
 
 __all__ = ["EndGoal", "FreeEndPath", "goal_block", "goal_family", "goal_error"]
 

@@ -2,10 +2,10 @@
 minimum-torque motion (Sect. 4.1), in the latent space or, as the baseline, in joint space."""
 from __future__ import annotations
 
-from ..kind import Kind
-from .problem import SCHEMA
-from .solve import METHODS, solve_latent_min_torque
-from .training import tube_reference
+from latentoc.kind import Kind
+from latentoc.min_torque.problem import SCHEMA
+from latentoc.min_torque.solve import METHODS, solve_latent_min_torque
+from latentoc.min_torque.training import tube_reference
 
 __all__ = ["MIN_TORQUE"]
 

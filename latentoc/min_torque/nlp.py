@@ -28,18 +28,18 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..dynamics import SymbolicModel
-from ..gpdm import GPDM
-from ..latent import GPLayer, IdentityLayer, Layer
-from ..nlp.assemble import Family, SparseNLP
-from ..nlp.blocks import RobotBlock
-from ..nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
-from ..nlp.inputs import NodeInputs
-from ..spline_path import SplinePath, constraint_times, gauss_legendre_nodes
-from .goal import FreeEndPath, goal_family
-from .limits import Limits
-from .objectives import Objective, velocity_block
-from .settings import MinTorqueSettings
+from latentoc.dynamics import SymbolicModel
+from latentoc.gpdm import GPDM
+from latentoc.latent import GPLayer, IdentityLayer, Layer
+from latentoc.nlp.assemble import Family, SparseNLP
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
+from latentoc.nlp.inputs import NodeInputs
+from latentoc.spline_path import SplinePath, constraint_times, gauss_legendre_nodes
+from latentoc.min_torque.goal import FreeEndPath, goal_family
+from latentoc.min_torque.limits import Limits
+from latentoc.min_torque.objectives import Objective, velocity_block
+from latentoc.min_torque.settings import MinTorqueSettings
 
 __all__ = ["MinTorqueNLP", "Samples", "latent_nlp", "joint_range_nlp", "torque_block", "ipopt_options",
            "CONSTRAINT_TOL"]

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..dynamics import SymbolicModel
-from ..nlp.blocks import RobotBlock, block_inputs
+from latentoc.dynamics import SymbolicModel
+from latentoc.nlp.blocks import RobotBlock, block_inputs
 
 __all__ = ["RUNNING_COSTS", "Objective", "velocity_block"]
 

@@ -14,19 +14,19 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from ..errors import ProblemError
-from ..gpdm import GPDMSettings
-from ..motions import TRAINING
-from ..motions.problem_inputs import check_problem_files
-from ..nlp.ipopt import HESSIANS
-from ..problem import Problem
-from ..robots import ROBOT
-from ..schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
-from ..sizes import check_memory, spline_transcription_bytes
-from ..spline_path import fixed_rows
-from ..tube import TUBE
-from .objectives import RUNNING_COSTS, Objective
-from .settings import MinTorqueSettings
+from latentoc.errors import ProblemError
+from latentoc.gpdm import GPDMSettings
+from latentoc.motions import TRAINING
+from latentoc.motions.problem_inputs import check_problem_files
+from latentoc.nlp.ipopt import HESSIANS
+from latentoc.problem import Problem
+from latentoc.robots import ROBOT
+from latentoc.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
+from latentoc.sizes import check_memory, spline_transcription_bytes
+from latentoc.spline_path import fixed_rows
+from latentoc.tube import TUBE
+from latentoc.min_torque.objectives import RUNNING_COSTS, Objective
+from latentoc.min_torque.settings import MinTorqueSettings
 
 __all__ = ["SCHEMA", "check_problem"]
 

@@ -5,11 +5,11 @@ from dataclasses import dataclass
 
 import pinocchio as pin
 
-from ..problem import Problem
-from ..spline import BSpline
-from .goal import EndGoal
-from .limits import Limits
-from .objectives import Objective
+from latentoc.problem import Problem
+from latentoc.spline import BSpline
+from latentoc.min_torque.goal import EndGoal
+from latentoc.min_torque.limits import Limits
+from latentoc.min_torque.objectives import Objective
 
 __all__ = ["MinTorqueSettings"]
 

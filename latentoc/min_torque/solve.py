@@ -17,22 +17,22 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics import SymbolicModel
-from ..errors import SolveError
-from ..gpdm import GPDM
-from ..kind import Solution, joint_range
-from ..motions import Demonstration, check_frames
-from ..nlp.blocks import compile_seconds
-from ..motions.problem_inputs import problem_demonstration, require_fixed_base
-from ..problem import Problem
-from ..robots import describe_robot
-from ..spline_path import SplinePath
-from ..tube import relative_tube, tube_delta
-from .exchange import solve_exchanged
-from .export import Solved, motion_result, time_grid
-from .nlp import MinTorqueNLP, Samples, joint_range_nlp, latent_nlp
-from .settings import MinTorqueSettings
-from .training import problem_gpdm, training_frames
+from latentoc.dynamics import SymbolicModel
+from latentoc.errors import SolveError
+from latentoc.gpdm import GPDM
+from latentoc.kind import Solution, joint_range
+from latentoc.motions import Demonstration, check_frames
+from latentoc.nlp.blocks import compile_seconds
+from latentoc.motions.problem_inputs import problem_demonstration, require_fixed_base
+from latentoc.problem import Problem
+from latentoc.robots import describe_robot
+from latentoc.spline_path import SplinePath
+from latentoc.tube import relative_tube, tube_delta
+from latentoc.min_torque.exchange import solve_exchanged
+from latentoc.min_torque.export import Solved, motion_result, time_grid
+from latentoc.min_torque.nlp import MinTorqueNLP, Samples, joint_range_nlp, latent_nlp
+from latentoc.min_torque.settings import MinTorqueSettings
+from latentoc.min_torque.training import problem_gpdm, training_frames
 
 __all__ = ["METHODS", "solve_latent_min_torque"]
 

@@ -11,11 +11,11 @@ import time
 
 import numpy as np
 
-from ..gpdm import GPDM, GPDMSettings, cached_gpdm
-from ..gpdm.cache import model_path
-from ..motions import Demonstration
-from ..motions.problem_inputs import problem_demonstration
-from ..problem import Problem
+from latentoc.gpdm import GPDM, GPDMSettings, cached_gpdm
+from latentoc.gpdm.cache import model_path
+from latentoc.motions import Demonstration
+from latentoc.motions.problem_inputs import problem_demonstration
+from latentoc.problem import Problem
 
 __all__ = ["training_frames", "gpdm_settings", "problem_gpdm", "tube_reference"]
 

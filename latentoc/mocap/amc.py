@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .asf import Skeleton
-from .errors import MocapFormatError, parse_number
+from latentoc.mocap.asf import Skeleton
+from latentoc.mocap.errors import MocapFormatError, parse_number
 
 
 @dataclass

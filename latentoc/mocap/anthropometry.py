@@ -41,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .asf import Skeleton
-from .skeleton_model import P_ASF_TO_WORLD, euler_matrix
+from latentoc.mocap.asf import Skeleton
+from latentoc.mocap.skeleton_model import P_ASF_TO_WORLD, euler_matrix
 
 DE_LEVA_STATURE = 1.741  # m, male reference sample
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .amc import Motion
-from .asf import Skeleton
-from .skeleton_model import P_ASF_TO_WORLD, euler_matrix, joint_q_index
+from latentoc.mocap.amc import Motion
+from latentoc.mocap.asf import Skeleton
+from latentoc.mocap.skeleton_model import P_ASF_TO_WORLD, euler_matrix, joint_q_index
 
 
 def root_pose(skeleton: Skeleton, root_values: np.ndarray, degrees: bool = True) -> tuple[np.ndarray, np.ndarray]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..errors import LatentocError
+from latentoc.errors import LatentocError
 
 
 class MocapFormatError(LatentocError, ValueError):

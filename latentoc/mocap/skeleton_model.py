@@ -34,7 +34,7 @@ from typing import Mapping
 import numpy as np
 import pinocchio as pin
 
-from .asf import Skeleton
+from latentoc.mocap.asf import Skeleton
 
 #: Proper rotation from ASF axes (Y up) to world axes (Z up): world = P @ asf.
 P_ASF_TO_WORLD = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])

@@ -20,9 +20,9 @@ import copy
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError
-from .asf import Skeleton
-from .skeleton_model import euler_matrix, joint_q_index
+from latentoc.errors import LatentocError
+from latentoc.mocap.asf import Skeleton
+from latentoc.mocap.skeleton_model import euler_matrix, joint_q_index
 
 S_ASF = np.diag([-1.0, 1.0, 1.0])
 S_WORLD = np.diag([1.0, -1.0, 1.0])

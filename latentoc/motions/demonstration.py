@@ -29,11 +29,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..robots.human_arm import arm_trial
-from ..robots.human_models import broad_jump_training_motion
-from ..robots.urdf import continuous_as_revolute
-from ..schema import Check
-from .readers import FORMATS, MotionFileError, RawMotion, read_raw_motion
+from latentoc.robots.human_arm import arm_trial
+from latentoc.robots.human_models import broad_jump_training_motion
+from latentoc.robots.urdf import continuous_as_revolute
+from latentoc.schema import Check
+from latentoc.motions.readers import FORMATS, MotionFileError, RawMotion, read_raw_motion
 
 __all__ = ["Demonstration", "TRAINING", "TRAINING_MOTIONS", "demonstration_from_file", "load_demonstration",
            "one_dof_joints", "check_frames", "MotionFileError"]

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError
-from ..kinematics import point_jacobian
+from latentoc.errors import LatentocError
+from latentoc.kinematics import point_jacobian
 
 __all__ = ["Plant", "PlantingError", "plant", "taper"]
 

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pinocchio as pin
 
-from ..errors import ProblemError, SolveError
-from ..problem import Problem
-from ..robots.setting import describe_robot, robot_files, robot_from_setting
-from .demonstration import Demonstration, load_demonstration
+from latentoc.errors import ProblemError, SolveError
+from latentoc.problem import Problem
+from latentoc.robots.setting import describe_robot, robot_files, robot_from_setting
+from latentoc.motions.demonstration import Demonstration, load_demonstration
 
 __all__ = ["problem_dir", "problem_robot", "problem_demonstration", "check_problem_files", "require_fixed_base"]
 

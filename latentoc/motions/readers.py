@@ -22,10 +22,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError
-from ..files import NPZ_ERRORS
-from ..mocap import motion_to_q, read_amc, read_asf
-from ..mocap.skeleton_model import joint_q_index
+from latentoc.errors import LatentocError
+from latentoc.files import NPZ_ERRORS
+from latentoc.mocap import motion_to_q, read_amc, read_asf
+from latentoc.mocap.skeleton_model import joint_q_index
 
 __all__ = ["MotionFileError", "RawMotion", "read_csv", "read_npz", "read_amc_motion", "read_raw_motion",
            "FORMATS"]

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .retargeting import Keypoint, RetargetError
+from latentoc.motions.retargeting import Keypoint, RetargetError
 
 __all__ = ["RetargetMap", "load_retarget_map"]
 

@@ -22,9 +22,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError
-from ..intervals import runs
-from ..kinematics import point_jacobian
+from latentoc.errors import LatentocError
+from latentoc.intervals import runs
+from latentoc.kinematics import point_jacobian
 
 __all__ = ["Keypoint", "Retargeted", "RetargetError", "retarget", "frame_id", "chain_scale", "resting"]
 

@@ -39,8 +39,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..progress import bar
-from . import jit, upgrade
+from latentoc.progress import bar
+from latentoc.nlp import jit, upgrade
 
 __all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks", "compile_seconds"]
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .assemble import SparseNLP
+from latentoc.nlp.assemble import SparseNLP
 
 __all__ = ["MAX_DENSE", "Curvature", "curvature"]
 

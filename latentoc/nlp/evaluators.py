@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..latent.gp_layer import GPLayer, IdentityLayer, LatentMotion, Layer
-from .blocks import RobotBlock, compile_blocks, stack_tangents
+from latentoc.latent.gp_layer import GPLayer, IdentityLayer, LatentMotion, Layer
+from latentoc.nlp.blocks import RobotBlock, compile_blocks, stack_tangents
 
 __all__ = ["BlockEvaluator", "MeanEvaluator", "VarianceEvaluator"]
 

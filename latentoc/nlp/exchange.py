@@ -13,8 +13,8 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 
-from ..intervals import runs
-from .ipopt import IpoptResult
+from latentoc.intervals import runs
+from latentoc.nlp.ipopt import IpoptResult
 
 __all__ = ["TUBE_TOL", "Exchange", "worst_times", "exchange_rounds"]
 

@@ -16,10 +16,10 @@ from typing import Any, Callable
 import casadi as ca
 import numpy as np
 
-from ..interrupts import deferred, interrupts_seen
-from ..progress import bar
-from ..threads import openblas_threads_at_load
-from .assemble import SparseNLP
+from latentoc.interrupts import deferred, interrupts_seen
+from latentoc.progress import bar
+from latentoc.threads import openblas_threads_at_load
+from latentoc.nlp.assemble import SparseNLP
 
 __all__ = ["IpoptResult", "solve", "load_ipopt", "HESSIANS", "DEFAULT_OPTIONS", "WARM_START_OPTIONS"]
 

@@ -22,11 +22,11 @@ from pathlib import Path
 
 import casadi as ca
 
-from ..errors import LatentocError
-from ..files import exclusive_lock
-from ..interrupts import interrupts_seen
-from ..paths import cache_dir
-from ..progress import bar
+from latentoc.errors import LatentocError
+from latentoc.files import exclusive_lock
+from latentoc.interrupts import interrupts_seen
+from latentoc.paths import cache_dir
+from latentoc.progress import bar
 
 CASADI_VERSION: str = getattr(ca, "__version__")  # a key of the cached libraries
 

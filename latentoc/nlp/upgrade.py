@@ -19,7 +19,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .jit import JIT_FLAGS, build_library, cache_dir, compiler
+from latentoc.nlp.jit import JIT_FLAGS, build_library, cache_dir, compiler
 
 __all__ = ["QUICK_FIRST", "quick_first", "settle", "start", "wait"]
 

@@ -14,18 +14,18 @@ whole set of a result folder from its files alone (``python -m latentoc plot RES
 * :mod:`.kinematics`: the stick figure's bones (shared with the animation and the 3-D view)
 * :mod:`.animation`: the motion as a GIF, and the live 3-D view (meshcat or viser)
 """
-from .contact import (contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com, polygon_margin,
-                      support_vertices)
-from .convergence import plot_convergence
-from .feet import ContactPoints, contact_points_of, point_positions, world_forces
-from .figure import DPI, FIGSIZES, FORMATS, LIMIT_STYLE, pixel_size, save
-from .joints import plot_joint_curves, plot_torques, plot_velocities
-from .kinematics import (PLANES, SIDE_COLOURS, bones, floating_base, frame_indices, joint_positions, model_of, side,
-                         skeleton_segments)
-from .latent import plot_latent_tube, resample, tube_mesh
-from .solution import actuated_joints, plot_solution, solution_figures
-from .stick import plot_stick_frames, scale_bar_length
-from .studies import plot_gain_vs_tube, plot_start_poses
+from latentoc.plots.contact import (contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com, polygon_margin,
+                                    support_vertices)
+from latentoc.plots.convergence import plot_convergence
+from latentoc.plots.feet import ContactPoints, contact_points_of, point_positions, world_forces
+from latentoc.plots.figure import DPI, FIGSIZES, FORMATS, LIMIT_STYLE, pixel_size, save
+from latentoc.plots.joints import plot_joint_curves, plot_torques, plot_velocities
+from latentoc.plots.kinematics import (PLANES, SIDE_COLOURS, bones, floating_base, frame_indices, joint_positions, model_of, side,
+                                       skeleton_segments)
+from latentoc.plots.latent import plot_latent_tube, resample, tube_mesh
+from latentoc.plots.solution import actuated_joints, plot_solution, solution_figures
+from latentoc.plots.stick import plot_stick_frames, scale_bar_length
+from latentoc.plots.studies import plot_gain_vs_tube, plot_start_poses
 
 __all__ = [
     "DPI", "FIGSIZES", "FORMATS", "LIMIT_STYLE", "pixel_size", "save", "tube_mesh", "resample", "plot_latent_tube",

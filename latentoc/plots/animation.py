@@ -20,8 +20,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
 
-from .figure import DPI
-from .kinematics import PLANES, SIDE_COLOURS, bones, floating_base, side, skeleton_segments
+from latentoc.plots.figure import DPI
+from latentoc.plots.kinematics import PLANES, SIDE_COLOURS, bones, floating_base, side, skeleton_segments
 
 __all__ = ["ANIMATION_SIZE", "GHOST_COLOUR", "frame_times", "frame_delays_cs", "animate", "stick_geometry", "view",
            "VisualizerNotInstalledError"]

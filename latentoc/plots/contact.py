@@ -20,10 +20,10 @@ import pinocchio as pin
 from matplotlib.figure import Figure
 from scipy.spatial import ConvexHull, QhullError
 
-from ..intervals import runs
-from ..support_polygon import margin, support_polygon
-from .feet import ContactPoints, contact_points_of
-from .figure import LIMIT_STYLE, new_figure, panel_axes
+from latentoc.intervals import runs
+from latentoc.support_polygon import margin, support_polygon
+from latentoc.plots.feet import ContactPoints, contact_points_of
+from latentoc.plots.figure import LIMIT_STYLE, new_figure, panel_axes
 
 POINT_COLOURS = ("C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9")  # no red: the limits' colour
 RATIO_LOAD = 1e-3  # body weights: a point's friction ratio is drawn where its f_z is above this

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .figure import panel_axes
+from latentoc.plots.figure import panel_axes
 
 __all__ = ["plot_convergence", "run_label"]
 

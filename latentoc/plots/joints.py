@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .figure import LIMIT_STYLE, panel_axes
+from latentoc.plots.figure import LIMIT_STYLE, panel_axes
 
 __all__ = ["plot_joint_curves", "plot_velocities", "plot_torques", "Bounds"]
 

@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .figure import new_figure
+from latentoc.plots.figure import new_figure
 
 __all__ = ["tube_mesh", "plot_latent_tube", "resample"]
 

@@ -16,15 +16,15 @@ import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
 
-from ..results import Result, result_and_output
-from .animation import animate
-from .contact import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com
-from .convergence import plot_convergence
-from .figure import FORMATS, save
-from .joints import plot_joint_curves, plot_torques, plot_velocities
-from .kinematics import floating_base, model_of
-from .latent import plot_latent_tube
-from .stick import plot_stick_frames
+from latentoc.results import Result, result_and_output
+from latentoc.plots.animation import animate
+from latentoc.plots.contact import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com
+from latentoc.plots.convergence import plot_convergence
+from latentoc.plots.figure import FORMATS, save
+from latentoc.plots.joints import plot_joint_curves, plot_torques, plot_velocities
+from latentoc.plots.kinematics import floating_base, model_of
+from latentoc.plots.latent import plot_latent_tube
+from latentoc.plots.stick import plot_stick_frames
 
 __all__ = ["plot_solution", "solution_figures", "actuated_joints"]
 

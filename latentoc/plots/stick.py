@@ -13,8 +13,8 @@ import numpy as np
 import pinocchio as pin
 from matplotlib.figure import Figure
 
-from .figure import new_figure, panel_axes
-from .kinematics import PLANES, SIDE_COLOURS, floating_base, frame_indices, side, skeleton_segments
+from latentoc.plots.figure import new_figure, panel_axes
+from latentoc.plots.kinematics import PLANES, SIDE_COLOURS, floating_base, frame_indices, side, skeleton_segments
 
 __all__ = ["plot_stick_frames", "scale_bar_length"]
 

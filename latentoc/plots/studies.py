@@ -9,9 +9,9 @@ import pinocchio as pin
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from ..results import Result
-from .figure import new_figure, panel_axes
-from .kinematics import PLANES, skeleton_segments
+from latentoc.results import Result
+from latentoc.plots.figure import new_figure, panel_axes
+from latentoc.plots.kinematics import PLANES, skeleton_segments
 
 __all__ = ["plot_gain_vs_tube", "plot_start_poses"]
 

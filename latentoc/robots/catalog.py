@@ -15,9 +15,9 @@ from typing import Callable
 
 import pinocchio
 
-from ..errors import LatentocError
-from .human_arm import build_human_arm
-from .human_models import build_cmu_humanoid
+from latentoc.errors import LatentocError
+from latentoc.robots.human_arm import build_human_arm
+from latentoc.robots.human_models import build_cmu_humanoid
 
 __all__ = ["load_robot", "robot_names", "robot_urdf", "example_robot_data_dir", "UnknownRobotError"]
 

@@ -38,9 +38,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..mocap.anthropometry import de_leva_segments, piece_inertia
-from ..mocap.skeleton_model import build_model, euler_matrix
-from .human_models import cmu_skeleton
+from latentoc.mocap.anthropometry import de_leva_segments, piece_inertia
+from latentoc.mocap.skeleton_model import build_model, euler_matrix
+from latentoc.robots.human_models import cmu_skeleton
 
 __all__ = ["ARM_BONES", "ARM_MASS", "START_POSE_DEG", "GOAL_POSE_DEG", "DETOUR_DEG", "arm_inertias", "build_human_arm",
            "arm_trial"]

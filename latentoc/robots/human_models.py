@@ -20,15 +20,15 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..mocap.amc import Motion, read_amc
-from ..mocap.anthropometry import BONE_MAP, cmu_inertias
-from ..mocap.asf import Skeleton, read_asf
-from ..mocap.configurations import motion_to_q
-from ..mocap.jumps import detect_jumps, jump_window
-from ..mocap.skeleton_model import build_model
-from ..paths import data_dir
-from .robot_checks import check_model
-from .urdf import RobotFileError
+from latentoc.mocap.amc import Motion, read_amc
+from latentoc.mocap.anthropometry import BONE_MAP, cmu_inertias
+from latentoc.mocap.asf import Skeleton, read_asf
+from latentoc.mocap.configurations import motion_to_q
+from latentoc.mocap.jumps import detect_jumps, jump_window
+from latentoc.mocap.skeleton_model import build_model
+from latentoc.paths import data_dir
+from latentoc.robots.robot_checks import check_model
+from latentoc.robots.urdf import RobotFileError
 
 __all__ = ["cmu_file", "cmu_skeleton", "cmu_motion", "build_cmu_humanoid", "cmu_configurations", "skeleton_chain",
            "broad_jump_sequences", "broad_jump_training_motion"]

@@ -16,10 +16,10 @@ from typing import Any
 
 import pinocchio
 
-from ..schema import Check
-from .catalog import load_robot, robot_names
-from .human_models import skeleton_chain
-from .urdf import load_urdf
+from latentoc.schema import Check
+from latentoc.robots.catalog import load_robot, robot_names
+from latentoc.robots.human_models import skeleton_chain
+from latentoc.robots.urdf import load_urdf
 
 __all__ = ["ROBOT", "robot_from_setting", "robot_files", "describe_robot"]
 

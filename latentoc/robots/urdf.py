@@ -14,9 +14,9 @@ from typing import Sequence
 import numpy as np
 import pinocchio
 
-from ..errors import LatentocError
-from .robot_checks import check_urdf
-from .urdf_tree import check_tree
+from latentoc.errors import LatentocError
+from latentoc.robots.robot_checks import check_urdf
+from latentoc.robots.urdf_tree import check_tree
 
 __all__ = ["RobotFileError", "load_urdf", "continuous_as_revolute"]
 

@@ -5,6 +5,6 @@
   ``sim`` extra: ``pip install -e '.[sim]'``);
 * :mod:`.command`: the command, its contact points from ``trajectory.npz`` and its files.
 """
-from .mjcf import mjcf_from_model, state_from_mujoco, state_to_mujoco
+from latentoc.simulate.mjcf import mjcf_from_model, state_from_mujoco, state_to_mujoco
 
 __all__ = ["mjcf_from_model", "state_to_mujoco", "state_from_mujoco"]

@@ -22,13 +22,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError, ResultFileError, SimulationError
-from ..files import atomic_write, check_out_dir
-from ..results import load_result, write_json
-from .mjcf import SOLIMP, SOLREF
+from latentoc.errors import LatentocError, ResultFileError, SimulationError
+from latentoc.files import atomic_write, check_out_dir
+from latentoc.results import load_result, write_json
+from latentoc.simulate.mjcf import SOLIMP, SOLREF
 
 if TYPE_CHECKING:
-    from .replay import Simulation
+    from latentoc.simulate.replay import Simulation
 
 __all__ = ["cmd_simulate", "contact_points", "mirror_axis", "check_mirror", "summary_lines", "DEFAULT_KP",
            "SIM_JSON", "SIM_NPZ"]
@@ -114,7 +114,7 @@ def check_mirror(model: pin.Model, q: np.ndarray, contacts: Sequence[Contact], t
 
 def _replay(model: pin.Model, trajectory: Mapping[str, Any], kp: float, kd: float | None,
             contacts: list[Contact], point: list[Contact] | None, friction: float, desc: str) -> Simulation:
-    from .replay import replay  # imports mujoco
+    from latentoc.simulate.replay import replay  # imports mujoco
 
     return replay(model, trajectory, kp, kd, contacts, friction, radius=RADIUS, timestep=TIMESTEP,
                   distance_point=point, integrator=INTEGRATOR, desc=desc)

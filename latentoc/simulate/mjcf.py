@@ -31,7 +31,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import pinocchio as pin
 
-from ..errors import SimulationError
+from latentoc.errors import SimulationError
 
 __all__ = ["mjcf_from_model", "state_to_mujoco", "state_from_mujoco", "force_from_mujoco", "dof_order",
            "joint_axis", "floating_base", "base_rotations", "SOLREF", "SOLIMP", "NEGLIGIBLE_MASS"]

@@ -35,9 +35,9 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from ..errors import SimulationError
-from ..progress import bar
-from .mjcf import base_rotations, dof_order, floating_base, mjcf_from_model, state_from_mujoco, state_to_mujoco
+from latentoc.errors import SimulationError
+from latentoc.progress import bar
+from latentoc.simulate.mjcf import base_rotations, dof_order, floating_base, mjcf_from_model, state_from_mujoco, state_to_mujoco
 
 __all__ = ["Simulation", "Gains", "gains", "replay", "summarize", "LOADED", "FALL_HEIGHT", "FALL_TILT_DEG"]
 

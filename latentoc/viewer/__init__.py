@@ -6,8 +6,8 @@ contact motion the contact forces, friction cones, support polygon, COM and ZMP;
 slider and the speed. :mod:`.geometry` (the robot's parts), :mod:`.scene` (the data), :mod:`.html`
 (the page; three.js embedded), ``js/page.js`` (the viewer).
 """
-from .geometry import Part, part_poses, robot_parts
-from .html import page_html, write_html
-from .scene import build_scene
+from latentoc.viewer.geometry import Part, part_poses, robot_parts
+from latentoc.viewer.html import page_html, write_html
+from latentoc.viewer.scene import build_scene
 
 __all__ = ["write_html", "page_html", "build_scene", "robot_parts", "part_poses", "Part"]

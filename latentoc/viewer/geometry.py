@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..plots.kinematics import bones, side
+from latentoc.plots.kinematics import bones, side
 
 __all__ = ["Part", "robot_parts", "mesh_parts", "capsule_parts", "part_poses", "urdf_of_setting"]
 
@@ -46,7 +46,7 @@ class Part:
 def urdf_of_setting(robot: Any, source: str | None) -> tuple[Path, list[Path]] | None:
     """The URDF and package folders of a problem's ``robot`` setting (a name or a ``{urdf = ...}``
     table relative to the problem file ``source``); None for a model without a URDF."""
-    from ..robots import example_robot_data_dir, robot_urdf
+    from latentoc.robots import example_robot_data_dir, robot_urdf
 
     if isinstance(robot, str):
         try:

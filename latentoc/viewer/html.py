@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..files import NPZ_ERRORS
-from ..results import Result, result_and_output
-from .retargeted import retargeted_scene
-from .scene import build_scene
+from latentoc.files import NPZ_ERRORS
+from latentoc.results import Result, result_and_output
+from latentoc.viewer.retargeted import retargeted_scene
+from latentoc.viewer.scene import build_scene
 
 SIM_NPZ = "simulation.npz"  # latentoc simulate's replay in a result folder
 

@@ -14,11 +14,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LatentocError
-from ..files import NPZ_ERRORS
-from ..robots.catalog import load_robot
-from .geometry import part_poses, robot_parts
-from .scene import _part_json, b64, sample_indices
+from latentoc.errors import LatentocError
+from latentoc.files import NPZ_ERRORS
+from latentoc.robots.catalog import load_robot
+from latentoc.viewer.geometry import part_poses, robot_parts
+from latentoc.viewer.scene import _part_json, b64, sample_indices
 
 __all__ = ["retargeted_scene", "read_retargeted", "GAP"]
 

@@ -21,12 +21,12 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..plots.contact import contact_series
-from ..plots.feet import MIRROR, contact_points_of, world_forces
-from ..plots.kinematics import floating_base, model_of
-from ..errors import ArgumentError
-from ..results import Result
-from .geometry import Part, part_poses, robot_parts
+from latentoc.plots.contact import contact_series
+from latentoc.plots.feet import MIRROR, contact_points_of, world_forces
+from latentoc.plots.kinematics import floating_base, model_of
+from latentoc.errors import ArgumentError
+from latentoc.results import Result
+from latentoc.viewer.geometry import Part, part_poses, robot_parts
 
 __all__ = ["build_scene", "b64", "sample_indices", "contact_points", "FORCE_SCALE", "CONE_HEIGHT"]
 

@@ -9,7 +9,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from ..errors import LatentocError
+from latentoc.errors import LatentocError
 
 __all__ = ["chromium", "still"]
 

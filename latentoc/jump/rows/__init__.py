@@ -17,8 +17,8 @@ from dataclasses import replace
 
 import casadi as ca
 
-from ...nlp.blocks import RobotBlock, block_inputs
-from ..robot import JumpRobot
+from latentoc.nlp.blocks import RobotBlock, block_inputs
+from latentoc.jump.robot import JumpRobot
 
 __all__ = ["inputs", "row_blocks", "families"]
 
@@ -36,7 +36,7 @@ def inputs(robot: JumpRobot, spec: dict[str, int]) -> tuple[tuple[ca.SX, ca.SX, 
 def row_blocks(robot: JumpRobot, d: int, joint_space: bool = False) -> dict[str, RobotBlock]:
     """Every row family's block for latent dimension d; ``joint_space``: for the joint path itself
     (the identity layer, d = 37), whose tangents are constant (:attr:`RobotBlock.identity`)."""
-    from . import contact, flight, limits, transitions
+    from latentoc.jump.rows import contact, flight, limits, transitions
 
     blocks = {"contact": contact.block(robot, d), "flight_dynamics": flight.dynamics_block(robot, d),
               "flight_clearance": flight.clearance_block(robot, d), "pitch_rate": flight.pitch_rate_block(robot, d),
@@ -50,7 +50,7 @@ def row_blocks(robot: JumpRobot, d: int, joint_space: bool = False) -> dict[str,
 
 def families() -> tuple:
     """The wiring functions of the NLP's families, in the order of its rows."""
-    from . import contact, flight, limits, transitions, tube
+    from latentoc.jump.rows import contact, flight, limits, transitions, tube
 
     return (contact.wire_nodes, contact.wire_samples, transitions.wire_takeoff, flight.wire_pitch,
             flight.wire_samples, flight.wire_clearance, transitions.wire_touchdown, transitions.wire_hinge, tube.wire,

@@ -14,13 +14,13 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ...nlp.blocks import RobotBlock
-from ..contact import EDGES, POINTS, point_forces, point_generalized_force, toe_wrench
-from ..robot import SAGITTAL_ROWS, JumpRobot, galilean
-from ..selection import POLYGON_EDGES
-from ..wiring import Rows, Wiring
-from ...support_polygon import symbolic_rows
-from . import inputs
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.jump.contact import EDGES, POINTS, point_forces, point_generalized_force, toe_wrench
+from latentoc.jump.robot import SAGITTAL_ROWS, JumpRobot, galilean
+from latentoc.jump.selection import POLYGON_EDGES
+from latentoc.jump.wiring import Rows, Wiring
+from latentoc.support_polygon import symbolic_rows
+from latentoc.jump.rows import inputs
 
 INPUTS = {"shift": 1, "held": 1, "lam": EDGES}
 

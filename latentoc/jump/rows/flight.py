@@ -15,13 +15,13 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ...nlp.assemble import Family
-from ...nlp.blocks import RobotBlock
-from ...nlp.evaluators import BlockEvaluator
-from ..flight import GRAVITY, cumulative_trapezoid_matrix, flight_functions
-from ..robot import SAGITTAL_ROWS, JumpRobot
-from ..wiring import Rows, Wiring
-from . import inputs
+from latentoc.nlp.assemble import Family
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.nlp.evaluators import BlockEvaluator
+from latentoc.jump.flight import GRAVITY, cumulative_trapezoid_matrix, flight_functions
+from latentoc.jump.robot import SAGITTAL_ROWS, JumpRobot
+from latentoc.jump.wiring import Rows, Wiring
+from latentoc.jump.rows import inputs
 
 DYNAMICS_INPUTS = {"pd": 1, "acc": 3}  # pitch rate; base accelerations (x, z, pitch)
 CLEARANCE_INPUTS = {"p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1}

@@ -18,12 +18,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ...nlp.blocks import RobotBlock
-from ..flight import flight_functions
-from ..robot import JumpRobot
-from ..wiring import Rows, Wiring
-from . import inputs
-from .flight import ballistic_com, flight_base
+from latentoc.nlp.blocks import RobotBlock
+from latentoc.jump.flight import flight_functions
+from latentoc.jump.robot import JumpRobot
+from latentoc.jump.wiring import Rows, Wiring
+from latentoc.jump.rows import inputs
+from latentoc.jump.rows.flight import ballistic_com, flight_base
 
 TAKEOFF_INPUTS = {"held": 1, "c_to": 2, "cd_to": 2, "L": 1, "p": 1}
 TOUCHDOWN_INPUTS = {"held": 1, "shift": 1, "p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1}

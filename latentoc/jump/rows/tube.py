@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ...nlp.assemble import Family
+from latentoc.nlp.assemble import Family
 
-from ...nlp.evaluators import VarianceEvaluator
-from ..wiring import Wiring
+from latentoc.nlp.evaluators import VarianceEvaluator
+from latentoc.jump.wiring import Wiring
 
 
 def wire(w: Wiring) -> None:
