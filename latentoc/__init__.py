@@ -21,9 +21,9 @@ from latentoc.version import __version__
 
 #: public name -> the module that defines it
 _WHERE = {"solve": "api", "SymbolicModel": "dynamics", "LatentocError": "errors", "GPDM": "gpdm",
-          "GPDMSettings": "gpdm", "learn_gpdm": "gpdm", "Problem": "problem", "load_problem": "problem_files",
-          "problem_names": "problem_files", "Result": "results", "load_result": "results", "load_robot": "robots",
-          "SweepResult": "tube_sweep", "sweep": "tube_sweep"}
+          "GPDMSettings": "gpdm", "learn_gpdm": "gpdm", "Problem": "problem.declaration",
+          "load_problem": "problem.toml_files", "problem_names": "problem.toml_files", "Result": "results",
+          "load_result": "results", "load_robot": "robots", "SweepResult": "sweeps", "sweep": "sweeps"}
 
 __all__ = ["__version__", "load_problem", "problem_names", "Problem", "solve", "Result", "load_result", "sweep",
            "SweepResult", "learn_gpdm", "GPDM", "GPDMSettings", "load_robot", "SymbolicModel", "LatentocError"]
@@ -46,8 +46,8 @@ if TYPE_CHECKING:
     from latentoc.dynamics import SymbolicModel
     from latentoc.errors import LatentocError
     from latentoc.gpdm import GPDM, GPDMSettings, learn_gpdm
-    from latentoc.problem import Problem
-    from latentoc.problem_files import load_problem, problem_names
+    from latentoc.problem.declaration import Problem
+    from latentoc.problem.toml_files import load_problem, problem_names
     from latentoc.results import Result, load_result
     from latentoc.robots import load_robot
-    from latentoc.tube_sweep import SweepResult, sweep
+    from latentoc.sweeps import SweepResult, sweep

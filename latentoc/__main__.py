@@ -1,5 +1,5 @@
-"""``python -m latentoc`` and the ``latentoc`` script (:func:`run`): see :mod:`latentoc.cli`."""
-from latentoc.interrupts import defer_at_start
+"""``python -m latentoc`` and the ``latentoc`` script (:func:`run`): see :mod:`latentoc.cli.parser`."""
+from latentoc.runtime.interrupts import defer_at_start
 
 defer_at_start()  # before any other import: a Ctrl-C from here on ends in "latentoc: interrupted"
 
@@ -7,7 +7,7 @@ import os  # noqa: E402
 import signal  # noqa: E402
 import sys  # noqa: E402
 
-from latentoc.cli import main  # noqa: E402
+from latentoc.cli.parser import main  # noqa: E402
 
 
 def run() -> None:

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 from latentoc.arguments import expect
 from latentoc.gpdm import GPDM
-from latentoc.interrupts import watching
-from latentoc.kind import Solution
-from latentoc.kinds import kind_of
-from latentoc.problem import Problem
+from latentoc.runtime.interrupts import watching
+from latentoc.problem.kinds import Solution
+from latentoc.problem.kinds import kind_of
+from latentoc.problem.declaration import Problem
 from latentoc.results import Result
 
 __all__ = ["solve"]
@@ -21,7 +21,7 @@ def solve(problem: Problem, *, method: str = "latent", joint_range_deg: float | 
     instead of learning the problem's. ``warm_start``: the result of the same problem at a
     smaller tube, whose optimum the solve starts from. ``verbose``: Ipopt's own log.
     Input that cannot be solved raises :class:`~latentoc.errors.SolveError` before any work;
-    Ctrl-C raises KeyboardInterrupt, also when the solver swallowed it (:mod:`latentoc.interrupts`)."""
+    Ctrl-C raises KeyboardInterrupt, also when the solver swallowed it (:mod:`latentoc.runtime.interrupts`)."""
     expect("solve", "problem", problem, Problem, "a Problem (latentoc.load_problem(NAME or PATH))")
     expect("solve", "method", method, str, "'latent' or 'joint-range'")
     if joint_range_deg is not None:

@@ -5,16 +5,16 @@ Anything else that escapes is a bug: the CLI shows its traceback and exits with 
 The tree (the domain errors live beside the code that raises them)::
 
     LatentocError
-    ├── ProblemError        a problem file or override (latentoc.problem)
+    ├── ProblemError        a problem file or override (latentoc.problem.declaration)
     ├── SolveError          a solve's arguments, or a provably infeasible tube (latentoc.solve)
     ├── ResultFileError     a result folder that cannot be read (latentoc.results)
-    ├── OutputError         an output folder that cannot be written (latentoc.files)
+    ├── OutputError         an output folder that cannot be written (latentoc.runtime.files)
     ├── SweepError          a sweep's tubes, workers or failed tasks (latentoc.sweep)
     ├── SimulationError     a replay's settings, or a model or result MuJoCo cannot replay (latentoc.simulate)
     ├── GPDMInputError      training data or GPDM settings (latentoc.gpdm)
     ├── MocapFormatError    a malformed ASF/AMC file (latentoc.mocap)
     ├── UnknownRobotError   a robot name (latentoc.robots)
-    └── SplineInputError    spline settings or data (latentoc.spline)
+    └── SplineInputError    spline settings or data (latentoc.latent.spline)
 
 Input errors that are about a value also derive from :class:`ValueError` (``UnknownRobotError``
 from :class:`LookupError`), so ``except ValueError`` around a call keeps working.

@@ -7,7 +7,7 @@ per-iteration log of every phase and exchange round, :func:`convergence_entry`),
 ``details``, the kind's own fields. ``trajectory.npz`` holds the arrays of :data:`TRAJECTORY_KEYS`, the one list of its
 keys; ``gpdm.npz`` the GPDM the motion was optimised in (:meth:`latentoc.gpdm.GPDM.save`), so a
 folder is self-contained: the plots read nothing else. The folder is written into a temporary
-folder beside it and renamed into place (:func:`latentoc.files.write_folder`; into an existing
+folder beside it and renamed into place (:func:`latentoc.runtime.files.write_folder`; into an existing
 folder, the old ``result.json`` goes first and the new one comes last), and ``result.json``
 records the SHA-256 of the other files (``checksums``), which :func:`load_result` verifies, so a
 folder with a ``result.json`` is one complete write. JSON is strict: a non-finite number is the
@@ -28,14 +28,14 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.environment import Environment
+from latentoc.runtime.environment import Environment
 from latentoc.errors import ResultFileError
 from latentoc.arguments import expect
-from latentoc.files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
+from latentoc.runtime.files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
 from latentoc.gpdm import GPDM
-from latentoc.kind import Solution
-from latentoc.problem import Problem
-from latentoc.tube import TubeResult
+from latentoc.problem.kinds import Solution
+from latentoc.problem.declaration import Problem
+from latentoc.latent.tube import TubeResult
 
 __all__ = ["Result", "Times", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
            "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",
@@ -156,7 +156,7 @@ class Result:
 
     @classmethod
     def from_solution(cls, solution: Solution, problem: Problem) -> Result:
-        """A kind's :class:`~latentoc.kind.Solution` of ``problem`` in the schema."""
+        """A kind's :class:`~latentoc.problem.kinds.Solution` of ``problem`` in the schema."""
         r = solution.result
         unknown = set(solution.trajectory) - set(TRAJECTORY_KEYS)
         if unknown:
@@ -358,7 +358,7 @@ def load_result(out_dir: str | Path) -> Result:
     return Result.from_files(files, str(out))
 
 
-_plain = plain  # JSON-ready values (latentoc.files.plain)
+_plain = plain  # JSON-ready values (latentoc.runtime.files.plain)
 
 
 def result_and_output(result: Result | str | Path, out: str | Path | None, name: str, who: str) -> tuple[Result, Path]:
@@ -393,7 +393,7 @@ def _gpdm_from_bytes(data: bytes) -> GPDM:
 
 def write_files(files: Mapping[str, bytes], out_dir: str | Path, marker: str = RESULT_NAME) -> list[Path]:
     """Write ``files`` (name -> content) as the folder ``out_dir``, all at once
-    (:func:`latentoc.files.write_folder`, ``marker`` last); returns the paths, the marker first."""
+    (:func:`latentoc.runtime.files.write_folder`, ``marker`` last); returns the paths, the marker first."""
     paths = write_folder(files, out_dir, marker, owned=(RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME))
     return sorted(paths, key=lambda p: (p.name != marker, p.name != TRAJECTORY_NAME))
 

@@ -18,7 +18,7 @@ def sigint_default():
 def jump_setup():
     """The packaged broad jump's set-up (planted training jump, GPDM, phases, limits), built once."""
     from latentoc.jump.problem import problem_setup
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     return problem_setup(load_problem("broad-jump"))
 

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from result_factory import make_result
 
-from latentoc.kind import Solution
+from latentoc.problem.kinds import Solution
 
 COST_INITIAL = 1000.0
 
@@ -34,7 +34,7 @@ def install(monkeypatch: Any, solver: Callable[..., Solution]) -> list[dict[str,
     import dataclasses
 
     import latentoc.api as api
-    from latentoc.kinds import kind_of
+    from latentoc.problem.kinds import kind_of
 
     calls: list[dict[str, Any]] = []
 

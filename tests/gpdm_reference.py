@@ -6,7 +6,7 @@ from collections.abc import Callable
 import numpy as np
 
 from latentoc.gpdm.learning import learning_problem
-from latentoc.threads import blas_threads
+from latentoc.runtime.threads import blas_threads
 from latentoc.gpdm.objective import HYPER_NAMES, neg_log_posterior, pack
 
 

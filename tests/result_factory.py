@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.environment import Environment
+from latentoc.runtime.environment import Environment
 from latentoc.results import Result, Times
-from latentoc.tube import TubeResult
+from latentoc.latent.tube import TubeResult
 
 
 def make_result(model: pin.Model | None = None, n: int = 11, *, tube: float | None = 0.5, method: str = "latent",

@@ -38,7 +38,7 @@ def test_every_input_error_is_a_latentoc_error():
     from latentoc.gpdm import GPDMInputError
     from latentoc.mocap import MocapFormatError
     from latentoc.robots import UnknownRobotError
-    from latentoc.spline import SplineInputError
+    from latentoc.latent.spline import SplineInputError
 
     for cls in (errors.ProblemError, errors.SolveError, errors.ResultFileError, errors.SweepError, GPDMInputError,
                 MocapFormatError, UnknownRobotError, SplineInputError):

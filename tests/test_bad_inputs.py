@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import latentoc
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.errors import SolveError
 from latentoc.gpdm import GPDMSettings, learn_gpdm
 
@@ -57,7 +57,7 @@ def test_a_npy_renamed_npz(tmp_path, capsys):
 
 
 def test_learn_out_a_file_fails_before_any_work(tmp_path, capsys, monkeypatch):
-    import latentoc.learned_motion as learn
+    import latentoc.cli.learn as learn
 
     monkeypatch.setattr(learn, "demonstration_from_file", lambda *a, **k: pytest.fail("work began"))
     (tmp_path / "f").write_text("mine")
@@ -129,7 +129,7 @@ def test_an_absolute_tube_that_bounds_nothing_is_refused(tmp_path, capsys):
     anywhere (its value far from the data, computed here from the GPDM's variance): refused before
     the solve, showing the 5x spelling and its delta; 0.5 (below the ceiling) is a tube."""
     from latentoc.min_torque.training import problem_gpdm
-    from latentoc.tube import tube_delta
+    from latentoc.latent.tube import tube_delta
 
     problem = latentoc.load_problem("arm-raise-small")
     gp, _ = problem_gpdm(problem)

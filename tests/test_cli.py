@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from latentoc.cli import main
-from latentoc.commands import summary
+from latentoc.cli.parser import main
+from latentoc.cli.commands import summary
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -22,8 +22,8 @@ def test_list(capsys):
 
 
 def test_list_verbose_and_show_print_the_resolved_settings(capsys):
-    from latentoc.problem import describe_problem
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.declaration import describe_problem
+    from latentoc.problem.toml_files import load_problem
 
     assert main(["show", "broad-jump"]) == 0
     assert capsys.readouterr().out == describe_problem(load_problem("broad-jump")) + "\n"
@@ -76,10 +76,10 @@ def test_module_entry_point_subprocess(tmp_path):
 def test_a_bug_exits_1_with_its_traceback(tmp_path):
     """An exception that is not a LatentocError is a bug: its traceback, exit code 1."""
     out = tmp_path / "o"
-    code = ("import dataclasses\nimport sys\nfrom latentoc.kinds import KINDS\n"
+    code = ("import dataclasses\nimport sys\nfrom latentoc.problem.kinds import KINDS\n"
             "def broken(problem, **kw):\n    return 1 / 0\n"
             "KINDS['latent-min-torque'] = dataclasses.replace(KINDS['latent-min-torque'], solve=broken)\n"
-            f"from latentoc.cli import main\nsys.exit(main(['solve', 'arm-raise-small', '--quiet', '--out', {str(out)!r}]))")
+            f"from latentoc.cli.parser import main\nsys.exit(main(['solve', 'arm-raise-small', '--quiet', '--out', {str(out)!r}]))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert not out.exists()
     assert p.returncode == 1 and "Traceback" in p.stderr and "ZeroDivisionError" in p.stderr
@@ -176,7 +176,7 @@ def test_solve_summary_reports_the_contact_checks():
 def test_an_arm_solve_imports_neither_the_jump_nor_scipy_interpolate(tmp_path):
     """What a fixed-base solve's start pays for: the jump package and scipy.interpolate (with the
     scipy.optimize it brings) are imported only by what uses them."""
-    code = ("import sys\nfrom latentoc.cli import main\n"
+    code = ("import sys\nfrom latentoc.cli.parser import main\n"
             f"assert main(['solve', 'arm-raise-small', '--quiet', '--out', {str(tmp_path)!r}]) == 0\n"
             "print(sorted(m for m in sys.modules if m.startswith(('latentoc.jump', 'scipy.interpolate', "
             "'scipy.optimize'))))\n")

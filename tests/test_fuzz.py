@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 from result_factory import make_result
 
 import latentoc
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.errors import ResultFileError
-from latentoc.problem_files import problems_dir
+from latentoc.problem.toml_files import problems_dir
 
 FUZZ = settings(max_examples=60, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
@@ -85,7 +85,7 @@ NPZ_ARRAYS = st.dictionaries(
 def test_fuzzed_motion_npz_files(tmp_path, capsys, monkeypatch, arrays, cut, junk):
     """An NPZ motion of random arrays, truncated, or replaced by bytes: `learn` reads it on the arm
     or exits 2 naming the file, writing nothing (learning itself is stood in for)."""
-    import latentoc.learned_motion as learn
+    import latentoc.cli.learn as learn
 
     class Accepted(Exception):
         pass

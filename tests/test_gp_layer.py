@@ -233,7 +233,7 @@ def test_identity_layer_bad_shapes(call, name):
 def test_blas_threads_restored(small_layer):
     """The layer runs OpenBLAS on one thread and gives the caller's thread count back, also
     after an error."""
-    from latentoc.threads import openblas_handles
+    from latentoc.runtime.threads import openblas_handles
 
     handles = openblas_handles()
     if not handles:

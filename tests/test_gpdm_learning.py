@@ -75,7 +75,7 @@ def test_the_arms_minimum_is_the_previous_learners():
     both points, polished by Newton steps on a central-difference Hessian, the same latent points to
     1e-6 after the best rotation (the previous learner stopped 2e-4 from it)."""
     from latentoc.min_torque.training import gpdm_settings, training_frames
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     problem = load_problem("arm-raise")
     ref = np.load(Path(__file__).with_name("gpdm_previous_minimum_arm.npz"))
@@ -95,9 +95,9 @@ def test_the_arms_minimum_is_the_previous_learners():
 
 @pytest.mark.parametrize("mode", ["bars", "lines"])
 def test_learning_shows_its_progress(capsys, monkeypatch, mode):
-    """Iteration, L and the Newton decrement on stderr while learning (tqdm, latentoc.progress): a bar
+    """Iteration, L and the Newton decrement on stderr while learning (tqdm, latentoc.runtime.progress): a bar
     redrawn in place on a terminal, in a log one line when it starts and one when it ends."""
-    from latentoc.progress import quiet, set_quiet
+    from latentoc.runtime.progress import quiet, set_quiet
 
     monkeypatch.setenv("LATENTOC_PROGRESS", mode)
     was = quiet()

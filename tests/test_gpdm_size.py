@@ -41,7 +41,7 @@ def test_learn_gpdm_refuses_before_computing(monkeypatch):
 
 
 def test_learn_command_refuses_a_long_recording(tmp_path, capsys, monkeypatch):
-    from latentoc.cli import main
+    from latentoc.cli.parser import main
 
     monkeypatch.setattr("latentoc.gpdm.size.available_memory", lambda: 256 * 2 ** 20)
     t = np.arange(3000) / 100.0

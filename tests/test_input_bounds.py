@@ -10,11 +10,11 @@ import tomllib
 import numpy as np
 import pytest
 
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.errors import ArgumentError, ProblemError
-from latentoc.problem_files import load_problem
+from latentoc.problem.toml_files import load_problem
 from latentoc.robots.urdf import RobotFileError, load_urdf
-from latentoc.toml_limits import MAX_DEPTH, MAX_KEY_PARTS, toml_bounds_problem
+from latentoc.problem.toml_limits import MAX_DEPTH, MAX_KEY_PARTS, toml_bounds_problem
 from latentoc.viewer.scene import sample_indices
 
 
@@ -35,7 +35,7 @@ def test_hostile_toml_is_refused_before_parsing(tmp_path, text, match):
 def test_bounds_scan_agrees_with_the_parser_on_real_files():
     """The scan passes what tomllib reads and counts its nesting and keys as tomllib does: strings,
     comments and numbers with dots do not count."""
-    from latentoc.problem_files import problems_dir
+    from latentoc.problem.toml_files import problems_dir
 
     for path in sorted(problems_dir().glob("*.toml")):
         assert toml_bounds_problem(path.read_text()) is None, path
@@ -147,7 +147,7 @@ def test_public_functions_name_a_wrong_argument():
 def test_every_command_argument_has_help_text():
     import argparse
 
-    from latentoc.cli import _parser
+    from latentoc.cli.parser import _parser
 
     commands = [a for a in _parser()._actions if isinstance(a, argparse._SubParsersAction)][0].choices
     missing = [f"{name} {a.dest}" for name, sub in commands.items() for a in sub._actions

@@ -12,7 +12,7 @@ import pytest
 from fake_solver import install, solution
 
 import latentoc
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.robots import load_robot
 
 pytestmark = pytest.mark.usefixtures("sigint_default")
@@ -89,7 +89,7 @@ def test_sweep_interrupted_stops_at_once(tmp_path, capsys, monkeypatch):
 
 
 def test_learn_interrupted_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
-    import latentoc.learned_motion as learn
+    import latentoc.cli.learn as learn
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
@@ -136,7 +136,7 @@ def test_sigint_inside_ipopt_exits_130_and_writes_nothing(tmp_path, command):
 def test_an_interrupt_a_library_catches_before_the_solve_is_raised(tmp_path, capsys, monkeypatch):
     """A SIGINT whose KeyboardInterrupt a library catches outside the solver (a bare ``except:`` in an
     import, say) still ends the command: exit 130, nothing written, no result printed."""
-    import latentoc.problem_files as files
+    import latentoc.problem.toml_files as files
 
     load = files.load_problem
 
@@ -153,7 +153,7 @@ def test_an_interrupt_a_library_catches_before_the_solve_is_raised(tmp_path, cap
 
 
 def test_an_interrupt_a_library_catches_in_a_command_that_writes_nothing_is_raised(capsys, monkeypatch):
-    import latentoc.problem_files as files
+    import latentoc.problem.toml_files as files
 
     names = files.problem_names
 

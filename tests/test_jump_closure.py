@@ -9,7 +9,7 @@ import pytest
 from latentoc.dynamics import SymbolicModel
 from latentoc.jump.base import base_to_freeflyer
 from latentoc.jump.closure import LegClosure
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 
 
 def _motion(closure: LegClosure, Y, Yd, Ydd, held, shift):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from latentoc.jump.exchange import TOLERANCE, violated
-from latentoc.nlp.exchange import worst_times
+from latentoc.nlp.exchange_rounds import worst_times
 from latentoc.jump.selection import Selection
 
 

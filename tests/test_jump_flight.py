@@ -5,7 +5,7 @@ import pinocchio as pin
 from latentoc.jump.base import base_to_freeflyer
 from latentoc.jump.flight import ballistic_base, cumulative_trapezoid_matrix, flight_functions
 from latentoc.latent.gp_layer import GPLayer
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 
 
 def test_cumulative_trapezoid_is_exact_for_linear_functions():

@@ -156,7 +156,7 @@ def test_bad_method_or_joint_range_is_refused_by_name(kw, match):
     """Before any set-up or solve: a SolveError (latentoc's root error) naming the input."""
     from latentoc.errors import LatentocError, SolveError
     from latentoc.jump.problem import solve_jump_problem
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     with pytest.raises(SolveError, match=match) as err:
         solve_jump_problem(load_problem("broad-jump"), **kw)
@@ -164,7 +164,7 @@ def test_bad_method_or_joint_range_is_refused_by_name(kw, match):
 
 
 def test_cli_negative_joint_range_exits_2_without_files(tmp_path, capsys):
-    from latentoc.cli import main
+    from latentoc.cli.parser import main
 
     out = tmp_path / "o"
     code = main(["solve", "broad-jump", "--method", "joint-range", "--joint-range", "-10", "--out", str(out)])
@@ -175,7 +175,7 @@ def test_cli_negative_joint_range_exits_2_without_files(tmp_path, capsys):
 
 def test_problem_file_has_the_baseline_ranges():
     """broad-jump's [sweep] ranges: what `sweep broad-jump --baseline joint-range` solves."""
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     problem = load_problem("broad-jump")
     assert problem.sweep_ranges == [10.0, 30.0, 90.0] and problem.joint_range_deg == 30.0

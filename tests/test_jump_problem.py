@@ -11,7 +11,7 @@ import latentoc.jump.problem as jp
 from latentoc.jump.settings import JumpSettings
 from latentoc.jump.solve import JumpSolution, solve_jump
 from latentoc.nlp.ipopt import IpoptResult
-from latentoc.problem_files import load_problem
+from latentoc.problem.toml_files import load_problem
 from latentoc.errors import SolveError
 
 

@@ -77,7 +77,7 @@ def test_initial_latent_path_keeps_the_kept_state_and_smooths_the_rest():
     """Equality-constrained smoothing: at the kept times the value and velocity equal the plain
     fit's (to solver precision), the end control points stay, and the curvature integral drops."""
     from latentoc.jump.path import initial_latent_path
-    from latentoc.spline import BSpline
+    from latentoc.latent.spline import BSpline
 
     sp = BSpline(15, 1.3)
     t = np.linspace(0.0, 1.3, 157)

@@ -84,7 +84,7 @@ def test_quick_solve_verifies():
     ground), and farther than the feasible point nearest the training fit (phase 1)."""
     import dataclasses
 
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
     from latentoc.jump.problem import solve_jump_problem as solve
 
     p = load_problem("broad-jump")

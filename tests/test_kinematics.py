@@ -1,10 +1,10 @@
-"""latentoc.kinematics against finite differences of Pinocchio's forward kinematics."""
+"""latentoc.robots.point_kinematics against finite differences of Pinocchio's forward kinematics."""
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
 
-from latentoc.kinematics import point_jacobian
+from latentoc.robots.point_kinematics import point_jacobian
 from latentoc.robots.catalog import load_robot
 
 

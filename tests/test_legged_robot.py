@@ -48,7 +48,7 @@ def _standing(model: pin.Model, decl) -> np.ndarray:
 
 def test_the_default_robot_is_the_cmu_humanoid_and_its_problem_file_declares_the_same():
     """problems/broad-jump.toml's [robot] is the built-in declaration (its points, mirror, limits)."""
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     p = load_problem("broad-jump")
     assert declaration(p.settings) == CMU_HUMANOID
@@ -135,7 +135,7 @@ def test_bad_robot_declarations_are_refused_with_the_key_named():
 
 
 def _g1_problem():
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     return load_problem("problems/g1-broad-jump.toml")
 

@@ -16,9 +16,9 @@ from latentoc.min_torque.settings import MinTorqueSettings
 from latentoc.latent import GPLayer, IdentityLayer
 from latentoc.min_torque.training import problem_gpdm, training_frames
 from latentoc.motions import TRAINING_MOTIONS
-from latentoc.problem_files import load_problem
+from latentoc.problem.toml_files import load_problem
 from latentoc.robots import load_robot
-from latentoc.spline_path import SplinePath, constraint_times, gauss_legendre_nodes, trapezoid_cost
+from latentoc.latent.spline_path import SplinePath, constraint_times, gauss_legendre_nodes, trapezoid_cost
 
 SETTINGS = MinTorqueSettings(duration=2.9, control_points=7, quadrature_points=4, constraint_points=6)
 RTOL = 1e-8  # relative to the largest entry of each compared block

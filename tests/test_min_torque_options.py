@@ -17,8 +17,8 @@ from latentoc.min_torque.objectives import Objective, velocity_block
 from latentoc.min_torque.settings import MinTorqueSettings
 from latentoc.latent import GPLayer
 from latentoc.robots import load_robot
-from latentoc.spline import BSpline
-from latentoc.spline_path import SplinePath
+from latentoc.latent.spline import BSpline
+from latentoc.latent.spline_path import SplinePath
 
 RNG = np.random.default_rng(7)
 

@@ -232,7 +232,7 @@ def test_times_in_another_unit_are_refused_with_the_likely_cause(tmp_path, ur5, 
 def test_a_joint_without_a_column_must_be_declared(tmp_path, panda, capsys):
     """A missing column is refused, naming the joint and both ways to hold it; the CLI's --hold
     declares it (the same reduced model as fixed_pose and locked)."""
-    from latentoc.cli import main
+    from latentoc.cli.parser import main
 
     t, Q = motion(k=7)
     Q += np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])

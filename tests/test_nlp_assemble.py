@@ -18,7 +18,7 @@ from latentoc.nlp.assemble import Family, SparseNLP
 from latentoc.nlp.blocks import RobotBlock, block_inputs
 from latentoc.nlp.evaluators import BlockEvaluator, VarianceEvaluator
 from latentoc.nlp.inputs import NodeInputs
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 
 D, LATENT, M = 3, 2, 7  # joints, latent dimension, control points
 FIXED_ROWS = (0, M - 1)

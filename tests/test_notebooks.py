@@ -1,14 +1,14 @@
-"""The notebooks are committed with the outputs of the current code (latentoc.notebooks): each one
+"""The notebooks are committed with the outputs of the current code (latentoc.reproduce.notebooks): each one
 records the command that remakes it, its code cells' hash and the fingerprints of the checkout's
-files it ran and read (latentoc.provenance); a change to those, not to unrelated modules, makes it
+files it ran and read (latentoc.reproduce.provenance); a change to those, not to unrelated modules, makes it
 stale. The recording itself: a called function's module counts, an imported one alone does not;
 comments and docstrings do not change a fingerprint. Progress bars work in a Jupyter kernel."""
 from __future__ import annotations
 
 import pytest
 
-from latentoc import provenance
-from latentoc.notebooks import check, notebook_paths
+from latentoc.reproduce import provenance
+from latentoc.reproduce.notebooks import check, notebook_paths
 
 
 @pytest.mark.parametrize("notebook", notebook_paths(), ids=lambda p: p.stem)
@@ -29,20 +29,20 @@ def test_fingerprints_see_code_not_comments(tmp_path):
 
 
 def test_recorder_notes_what_ran_and_what_was_read(tmp_path):
-    import latentoc.start_poses  # imported, none of its functions called below
-    from latentoc.spline import BSpline
+    import latentoc.min_torque.start_poses  # imported, none of its functions called below
+    from latentoc.latent.spline import BSpline
 
     with provenance.Recorder() as rec:
         BSpline(7, 2.0, 3).basis([0.5], 0)
         (provenance.ROOT / "problems" / "arm-raise.toml").read_text()
         (tmp_path / "out.txt").write_text("written, not read")
-    assert "latentoc/spline.py" in rec.inputs and "problems/arm-raise.toml" in rec.inputs
-    assert "latentoc/start_poses.py" not in rec.inputs and latentoc.start_poses
+    assert "latentoc/latent/spline.py" in rec.inputs and "problems/arm-raise.toml" in rec.inputs
+    assert "latentoc/min_torque/start_poses.py" not in rec.inputs and latentoc.min_torque.start_poses
     assert all(not k.startswith(("/", "..")) for k in rec.inputs)
-    assert provenance.stale(rec.inputs) == [] and provenance.stale({"latentoc/spline.py": "0" * 64}) == ["latentoc/spline.py"]
+    assert provenance.stale(rec.inputs) == [] and provenance.stale({"latentoc/latent/spline.py": "0" * 64}) == ["latentoc/latent/spline.py"]
     assert set(provenance.uncommitted(rec.inputs)) <= set(rec.inputs)
-    assert provenance.module_files("%matplotlib inline\nfrom latentoc.reproduce import PAPER") == \
-        {str(provenance.ROOT / "latentoc" / "reproduce.py")}
+    assert provenance.module_files("%matplotlib inline\nfrom latentoc.reproduce.paper import PAPER") == \
+        {str(provenance.ROOT / "latentoc" / "reproduce" / "paper.py")}
 
 
 @pytest.mark.slow  # starts a Jupyter kernel
@@ -52,7 +52,7 @@ def test_progress_bar_in_jupyter():
     from nbclient import NotebookClient
 
     nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_code_cell("from latentoc.progress import bar, set_quiet\nset_quiet(False)\n"
+    nb.cells = [nbformat.v4.new_code_cell("from latentoc.runtime.progress import bar, set_quiet\nset_quiet(False)\n"
                                           "for _ in bar(range(3), desc='steps', leave=True):\n    pass")]
     NotebookClient(nb, kernel_name="python3", timeout=120).execute()
     text = "".join(o.get("text", "") for o in nb.cells[0].outputs)

@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.gpdm import GPDM
 from latentoc.results import load_result
 from latentoc.robots import load_robot

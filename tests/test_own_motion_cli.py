@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.gpdm import GPDM
 from latentoc.robots import example_robot_data_dir
 

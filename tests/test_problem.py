@@ -9,11 +9,11 @@ import pytest
 
 from latentoc.errors import LatentocError, ProblemError
 from latentoc.gpdm import GPDMSettings
-from latentoc.kinds import KINDS, kind_of
+from latentoc.problem.kinds import KINDS, kind_of
 from latentoc.min_torque.training import training_frames
-from latentoc.problem import describe_problem
-from latentoc.problem_files import load_problem, problem_from_dict, problem_names
-from latentoc.tube import parse_tube
+from latentoc.problem.declaration import describe_problem
+from latentoc.problem.toml_files import load_problem, problem_from_dict, problem_names
+from latentoc.latent.tube import parse_tube
 
 
 def test_packaged_problems_load():
@@ -178,7 +178,7 @@ def test_parse_tube():
 
 def test_every_setting_of_every_kind_is_described():
     """`latentoc show` says what each key of each kind means, not only what its value must be."""
-    from latentoc.schema import Table
+    from latentoc.problem.schema import Table
 
     for kind in KINDS.values():
         for s in kind.schema.settings:

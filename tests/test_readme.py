@@ -21,7 +21,7 @@ def test_first_two_commands_are_what_ci_runs():
 
 
 def test_main_job_command_follows_and_names_a_known_problem():
-    from latentoc.problem_files import problem_names
+    from latentoc.problem.toml_files import problem_names
 
     readme = (ROOT / "README.md").read_text()
     main_job = _code_blocks(readme)[1][0]
@@ -59,8 +59,8 @@ def test_readme_arm_table_is_the_reproductions():
 
 def test_readme_images_are_made_by_the_current_code():
     """Every image the README shows is one `python -m latentoc reproduce --figures` writes, the very file
-    it wrote, from the code and data of this checkout (docs/images/figures.json, latentoc.provenance)."""
-    from latentoc.readme_figures import COMMAND, IMAGES, image_problems
+    it wrote, from the code and data of this checkout (docs/images/figures.json, latentoc.reproduce.provenance)."""
+    from latentoc.reproduce.figures import COMMAND, IMAGES, image_problems
 
     readme = (ROOT / "README.md").read_text()
     shown = set(re.findall(r"\]\(docs/images/([^)]+)\)", readme))

@@ -10,10 +10,10 @@ import pytest
 from result_factory import make_result
 
 from latentoc.errors import LatentocError, ResultFileError
-from latentoc.kind import Solution
+from latentoc.problem.kinds import Solution
 from latentoc.results import (GPDM_NAME, RESULT_NAME, SCHEMA_VERSION, TRAJECTORY_KEYS, TRAJECTORY_NAME, Result,
                               atomic_write, load_result)
-from latentoc.tube import TubeResult
+from latentoc.latent.tube import TubeResult
 
 
 def test_round_trip(tmp_path):
@@ -179,7 +179,7 @@ def test_a_write_that_fails_midway_leaves_no_mixed_folder(tmp_path, monkeypatch)
     """Saving over an earlier result: a failure while the new files move in leaves a folder with no
     result.json (incomplete, resumed by a sweep), never the old result.json over new arrays; saving
     into a new folder that fails leaves no folder and no temporary one."""
-    import latentoc.files as files
+    import latentoc.runtime.files as files
 
     make_result(gain=10.0).save(tmp_path / "r")
     real = os.replace
@@ -218,7 +218,7 @@ def test_saving_over_a_result_keeps_other_files_and_drops_stale_ones(tmp_path):
 
 
 def test_out_must_be_a_writable_folder(tmp_path):
-    from latentoc.files import OutputError, check_out_dir
+    from latentoc.runtime.files import OutputError, check_out_dir
 
     (tmp_path / "file").write_text("x")
     with pytest.raises(OutputError, match="is a file, not a folder"):
@@ -241,7 +241,7 @@ def _save(out, writer: int, pause: float) -> None:
     """Save a folder whose every file names the writer, pausing ``pause`` s before its marker."""
     import time
 
-    from latentoc.files import write_folder
+    from latentoc.runtime.files import write_folder
 
     replace = os.replace
 
@@ -297,7 +297,7 @@ def test_arrays_that_match_their_checksums_but_not_the_model_are_named(tmp_path,
 def test_out_is_checked_before_any_work(tmp_path):
     """--out: a dangling link, a name the file system cannot take, a folder nothing can be made in
     are refused up front, naming the path (issue 36: they failed after the solve)."""
-    from latentoc.files import OutputError, check_out_dir
+    from latentoc.runtime.files import OutputError, check_out_dir
 
     (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
     for bad, match in [(tmp_path / "dangling", "is a symbolic link to .*nowhere, which does not exist"),
@@ -314,7 +314,7 @@ def test_a_killed_writers_temporary_folder_is_removed_by_the_next_save(tmp_path)
     import subprocess
     import sys
 
-    from latentoc.files import write_folder
+    from latentoc.runtime.files import write_folder
 
     gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
     left = tmp_path / f".r.{int(gone.stdout)}.abcd1234.tmp"  # what a SIGTERM while writing leaves

@@ -6,7 +6,7 @@ import pinocchio as pin
 import pytest
 from test_own_robot import MESHLESS
 
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.motions import demonstration_from_file
 from latentoc.robots import RobotFileError, continuous_as_revolute, example_robot_data_dir, load_robot, load_urdf
 

@@ -13,7 +13,7 @@ import pytest
 
 from latentoc.baselines import sampling
 from latentoc.min_torque.training import training_frames
-from latentoc.problem_files import load_problem
+from latentoc.problem.toml_files import load_problem
 from latentoc.robots import load_robot
 
 try:
@@ -159,7 +159,7 @@ def test_reported_cost_recomputed_with_rnea(result):
 _REPRO = """
 import json, sys
 from latentoc.baselines.sampling import plan, SamplingSettings
-from latentoc.problem_files import load_problem
+from latentoc.problem.toml_files import load_problem
 r = plan(load_problem("arm-raise"), iterations=[60], settings=SamplingSettings(seed=int(sys.argv[1])))[0]
 print(json.dumps({"cost": r.cost_planner, "knots": r.knots.tolist(), "seeded": r.seeded}))
 """

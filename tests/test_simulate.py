@@ -9,7 +9,7 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from latentoc.cli import main  # noqa: E402
+from latentoc.cli.parser import main  # noqa: E402
 from latentoc.errors import SimulationError  # noqa: E402
 from latentoc.simulate.command import DEFAULT_KP as SIM_KP  # noqa: E402
 from latentoc.simulate.command import check_mirror, contact_points  # noqa: E402

@@ -10,7 +10,7 @@ import latentoc
 from latentoc import load_problem, solve
 from latentoc.errors import ProblemError, SolveError
 from latentoc.min_torque.training import problem_gpdm, training_frames
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 
 pytestmark = pytest.mark.slow  # every test here solves
 

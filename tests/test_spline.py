@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from latentoc.spline import BSpline, SplineInputError
+from latentoc.latent.spline import BSpline, SplineInputError
 
 
 def test_partition_of_unity_and_clamped_ends():

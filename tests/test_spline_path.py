@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from latentoc.spline import BSpline
-from latentoc.spline_path import (SplinePath, constraint_times, fit_control_points, fixed_rows, gauss_legendre_nodes,
+from latentoc.latent.spline import BSpline
+from latentoc.latent.spline_path import (SplinePath, constraint_times, fit_control_points, fixed_rows, gauss_legendre_nodes,
                                   trapezoid_cost)
 
 

@@ -4,10 +4,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.problem_files import load_problem
+from latentoc.problem.toml_files import load_problem
 from latentoc.robots import load_robot
 from latentoc.min_torque.training import problem_gpdm
-from latentoc.start_poses import radial_direction, start_pose_distances, tube_boundary_point
+from latentoc.min_torque.start_poses import radial_direction, start_pose_distances, tube_boundary_point
 
 
 @pytest.fixture(scope="module")

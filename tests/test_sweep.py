@@ -11,7 +11,7 @@ import pytest
 
 from latentoc import load_problem, load_result, sweep
 from latentoc.errors import SweepError
-from latentoc.tube_sweep import SweepTask, format_table, run_task, write_sweep
+from latentoc.sweeps import SweepTask, format_table, run_task, write_sweep
 
 REPO = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.slow  # every test here solves
@@ -133,7 +133,7 @@ def test_cli_workers_give_the_serial_files(tmp_path):
 
 def test_workers_without_dask_name_the_extra(tmp_path):
     code = ("import sys; sys.modules['distributed'] = None\n"
-            "from latentoc.cli import main\n"
+            "from latentoc.cli.parser import main\n"
             f"sys.exit(main(['sweep', 'arm-raise-small', '--workers', '2', '--out', {str(tmp_path / 'o')!r}]))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert p.returncode == 2 and "pip install 'latentoc[distributed]'" in p.stderr and "Traceback" not in p.stderr

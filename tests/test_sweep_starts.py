@@ -8,8 +8,8 @@ import pytest
 from fake_solver import install, solution
 
 import latentoc
-from latentoc.cli import main
-from latentoc.tube_sweep import format_table
+from latentoc.cli.parser import main
+from latentoc.sweeps import format_table
 
 
 def _problem():

@@ -18,7 +18,7 @@ import pytest
 from browser import chromium, dom, screenshot
 from result_factory import jump_trajectory, make_jump_result, make_result
 
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.jump.contact import MIRROR, FootGeometry, foot_points
 from latentoc.plots import skeleton_segments
 from latentoc.robots import example_robot_data_dir, load_robot, robot_urdf

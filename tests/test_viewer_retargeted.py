@@ -14,7 +14,7 @@ import pinocchio as pin
 import pytest
 from browser import chromium, dom, screenshot
 
-from latentoc.cli import main
+from latentoc.cli.parser import main
 from latentoc.robots import load_robot
 from latentoc.viewer import part_poses, robot_parts, write_html
 from latentoc.viewer.retargeted import GAP, retargeted_scene

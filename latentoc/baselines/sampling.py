@@ -44,7 +44,7 @@ import pinocchio as pin
 from latentoc.errors import LatentocError
 from latentoc.min_torque.limits import torque_limit_vector
 from latentoc.min_torque.training import training_frames
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 from latentoc.robots import load_robot
 
 __all__ = ["EXTRA", "OmplUnavailable", "require_ompl", "SamplingSettings", "ArmTask", "HermiteEdges",

@@ -33,12 +33,12 @@ from latentoc.min_torque.settings import MinTorqueSettings
 from latentoc.min_torque.training import problem_gpdm, training_frames
 from latentoc.motions import TRAINING_MOTIONS
 from latentoc.nlp import ipopt, upgrade
-from latentoc.nlp.jit import threads
-from latentoc.problem_files import load_problem
-from latentoc.progress import set_quiet
+from latentoc.runtime.threads import mapped_threads
+from latentoc.problem.toml_files import load_problem
+from latentoc.runtime.progress import set_quiet
 from latentoc.results import load_result
 from latentoc.robots import load_robot
-from latentoc.tube import resolve_tube
+from latentoc.latent.tube import resolve_tube
 
 TARGET_FIRST_S, TARGET_5X_S = 5.0, 0.3
 CALLBACKS = (("f", "nlp_f"), ("g", "nlp_g"), ("grad_f", "nlp_grad_f"), ("jac_g", "nlp_jac_g"), ("hess", "nlp_hess_l"))
@@ -65,7 +65,7 @@ def first_solve(problem: str, tube: str) -> dict:
 
 def _imports() -> float:
     """Wall of a Python process that imports what ``solve`` of an arm problem imports, then exits."""
-    code = "import latentoc.commands, latentoc.api, latentoc.problem_files, latentoc.min_torque.kind"
+    code = "import latentoc.cli.commands, latentoc.api, latentoc.problem.toml_files, latentoc.min_torque.kind"
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-c", code], check=True)
     return time.perf_counter() - t0
@@ -113,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-first", action="store_true", help="skip the empty-cache first solve")
     args = p.parse_args(argv)
     problem = load_problem(args.problem)
-    print(f"{args.problem}: block threads {threads()}, OPENBLAS_NUM_THREADS "
+    print(f"{args.problem}: block threads {mapped_threads()}, OPENBLAS_NUM_THREADS "
           f"{os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, load average {os.getloadavg()[0]:.2f}", flush=True)
     if not args.no_first:
         tube = args.tubes[0] if args.tubes else str(problem.tube)

@@ -62,7 +62,7 @@ def machine() -> str:
 def _child(case: str) -> dict:
     """One case, learned in this process: its data, learning time and model."""
     from latentoc.gpdm import GPDMSettings, learn_gpdm
-    from latentoc.progress import set_quiet
+    from latentoc.runtime.progress import set_quiet
 
     set_quiet(True)
     if case == "jump":
@@ -89,7 +89,7 @@ def _split(case: str) -> list[dict]:
     in this (child) process."""
     import latentoc.gpdm.learning as learning
     from latentoc.gpdm import GPDMSettings
-    from latentoc.progress import set_quiet
+    from latentoc.runtime.progress import set_quiet
 
     set_quiet(True)
     levels: list[dict] = []

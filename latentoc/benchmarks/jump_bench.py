@@ -71,7 +71,7 @@ def cold_solve(tube: float) -> dict:
     from latentoc.jump.problem import problem_setup, settings_from_problem
     from latentoc.jump.solve import solve_jump
     from latentoc.latent.gp_layer import GPLayer
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     problem = load_problem("broad-jump")
     js = problem_setup(problem)
@@ -95,7 +95,7 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     from latentoc.jump.selection import Selection
     from latentoc.jump.start import initial_point
     from latentoc.latent.gp_layer import GPLayer
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     problem = load_problem("broad-jump")
     js = problem_setup(problem)

@@ -30,9 +30,9 @@ from latentoc.jump.cleaning import learned_leg
 from latentoc.jump.contact import POINTS, foot_points, joint_embedding
 from latentoc.jump.problem import setup
 from latentoc.jump.torque_limits import contact_torques
-from latentoc.kinematics import point_jacobian
+from latentoc.robots.point_kinematics import point_jacobian
 from latentoc.latent.gp_layer import GPLayer
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 
 RATE = 1000.0
 PLANT_WEIGHT = 1e3  # per m of planting error, per point and 1 kHz sample

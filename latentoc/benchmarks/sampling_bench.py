@@ -22,8 +22,8 @@ import platform
 import time
 
 from latentoc.baselines.sampling import SamplingSettings, plan, require_ompl
-from latentoc.problem_files import load_problem
-from latentoc.progress import set_quiet
+from latentoc.problem.toml_files import load_problem
+from latentoc.runtime.progress import set_quiet
 
 PAPER_TABLE3 = ((3830, 355.38, -0.96, 5436), (4265, 315.73, 10.30, 8310), (5390, 275.06, 21.86, 15529),
                 (7660, 252.74, 28.20, 24371), (9135, 225.59, 35.91, 46532))  # iteration, cost, gain %, s

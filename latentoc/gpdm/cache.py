@@ -1,7 +1,7 @@
 """Learned GPDMs kept on disk: learning converges (:mod:`latentoc.gpdm.newton`), so the same data and
 settings give the same model, and a problem learns its model once per machine, not per process.
 
-Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.paths.cache_dir`), the key a
+Files: ``gpdm_<key>.npz`` in ``<cache_dir>/gpdm`` (:func:`latentoc.runtime.paths.cache_dir`), the key a
 hash of the learner's version, the training sequences and the settings. The package ships the
 models of its larger problems (the broad jump's: 5 s to learn) under the same names in
 ``latentoc/models/``; tests/test_gpdm_cache.py checks each is a converged minimum of its data.
@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from latentoc.files import NPZ_ERRORS, atomic_write, sha256
-from latentoc.paths import cache_dir
+from latentoc.runtime.files import NPZ_ERRORS, atomic_write, sha256
+from latentoc.runtime.paths import cache_dir
 from latentoc.gpdm.learning import learn_gpdm
 from latentoc.gpdm.model import GPDM
-from latentoc.gpdm.settings import GPDMSettings
+from latentoc.gpdm.learning_settings import GPDMSettings
 
 __all__ = ["LEARNER_VERSION", "SHIPPED", "cached_gpdm", "model_path"]
 

@@ -40,13 +40,13 @@ from typing import Sequence
 import numpy as np
 
 from latentoc.arguments import expect
-from latentoc.progress import bar
-from latentoc.threads import blas_threads
+from latentoc.runtime.progress import bar
+from latentoc.runtime.threads import blas_threads
 from latentoc.gpdm.hessian import hessian
 from latentoc.gpdm.newton import minimize_newton
 from latentoc.gpdm.model import GPDM, LearningReport
 from latentoc.gpdm.objective import HYPER_NAMES, Evaluation, GPDMProblem, evaluate, optimal_w, unpack
-from latentoc.gpdm.settings import GPDMInputError, GPDMSettings, check_settings
+from latentoc.gpdm.learning_settings import GPDMInputError, GPDMSettings, check_settings
 from latentoc.gpdm.size import check_size
 from latentoc.gpdm.start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start
 
@@ -139,7 +139,7 @@ class _FreePoint:
 def learn_gpdm(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings | None = None) -> GPDM:
     """Learn a GPDM from one sequence (N x D) or a list of sequences: minimise Eq. 16 with the
     settings' fixed hyperparameters and priors, W profiled out, until the convergence test holds.
-    Shows its progress (iteration, L, Newton decrement) on stderr (:mod:`latentoc.progress`).
+    Shows its progress (iteration, L, Newton decrement) on stderr (:mod:`latentoc.runtime.progress`).
 
     Module docstring: the model and the procedure. Raises :class:`~latentoc.gpdm.size.GPDMSizeError` before anything is
     computed when the data need more memory than the machine has.

@@ -28,7 +28,7 @@ from scipy.linalg import solve_triangular
 
 from latentoc.gpdm.kernels import rbf_linear_kernel
 from latentoc.gpdm.objective import safe_cholesky, sequence_indices
-from latentoc.gpdm.settings import GPDMSettings
+from latentoc.gpdm.learning_settings import GPDMSettings
 
 if TYPE_CHECKING:  # pragma: no cover
     import casadi

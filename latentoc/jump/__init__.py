@@ -17,6 +17,6 @@ Modules, one concept each:
 * :mod:`.solve` - phase 1, phase 2 and the exchange's rounds (:mod:`.exchange`);
 * :mod:`.export` - the solved motion on a 1 kHz grid;
 * :mod:`.problem` - settings, set-up and solve of a problem file;
-* :mod:`.kind` - the ``"broad-jump"`` kind (:data:`latentoc.kinds.KINDS`);
+* :mod:`.kind` - the ``"broad-jump"`` kind (:data:`latentoc.problem.kinds.KINDS`);
 * :mod:`.verify` - 1 kHz recomputation with numeric Pinocchio.
 """

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from latentoc.latent.gp_layer import Layer
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.jump.flight import ballistic_base, flight_functions
 from latentoc.jump.phases import Phases
 from latentoc.jump.robot import JumpRobot

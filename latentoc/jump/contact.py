@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.kinematics import point_jacobian
+from latentoc.robots.point_kinematics import point_jacobian
 from latentoc.mocap.symmetry import SymmetryMap
 
 POINTS = ("heel", "ball", "toe", "pad")

@@ -10,7 +10,7 @@ worst 1 kHz time and its neighbours (contact: its own edge weights and the rows 
 there; flight: its own free-fall variables and torque rows; the tube: a point), and the contact
 nodes' own torque and polygon rows that are near are switched on; then the solve resumes warm
 (:mod:`.warm`). It ends when nothing on the 1 kHz grid is violated beyond :data:`TOLERANCE`
-(the loop: :func:`latentoc.nlp.exchange.exchange_rounds`).
+(the loop: :func:`latentoc.nlp.exchange_rounds.exchange_rounds`).
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from latentoc.nlp.evaluators import BlockEvaluator
-from latentoc.nlp.exchange import TUBE_TOL, worst_times
+from latentoc.nlp.exchange_rounds import TUBE_TOL, worst_times
 from latentoc.jump.contact import POINTS
 from latentoc.jump.nlp import JumpNLP
 from latentoc.jump.phases import Phases

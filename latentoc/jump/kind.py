@@ -1,11 +1,11 @@
-"""The ``"broad-jump"`` problem kind (:class:`~latentoc.kind.Kind`): the humanoid's standing broad jump.
+"""The ``"broad-jump"`` problem kind (:class:`~latentoc.problem.kinds.Kind`): the humanoid's standing broad jump.
 
 Its schema, tube reference and solve are :mod:`.problem`'s; its NLP builder stays
 :func:`.nlp.build_nlp`.
 """
 from __future__ import annotations
 
-from latentoc.kind import Kind
+from latentoc.problem.kinds import Kind
 from latentoc.jump.path import METHODS
 from latentoc.jump.problem import SCHEMA, solve_jump_problem, tube_reference
 

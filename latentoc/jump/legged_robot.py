@@ -33,7 +33,7 @@ import pinocchio as pin
 from latentoc.errors import ProblemError
 from latentoc.mocap.symmetry import MirrorError, SymmetryMap
 from latentoc.robots.catalog import load_robot, robot_names
-from latentoc.schema import Check, choice
+from latentoc.problem.schema import Check, choice
 from latentoc.jump.contact import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
 
 __all__ = ["PointDeclaration", "RobotDeclaration", "CMU_HUMANOID", "ROBOT_KEYS", "declaration", "robot_model"]

@@ -31,7 +31,7 @@ import numpy as np
 from latentoc.latent.gp_layer import Layer
 from latentoc.nlp.assemble import SparseNLP
 from latentoc.nlp.blocks import RobotBlock
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.jump.contact import EDGES, POINTS
 from latentoc.jump.phases import Phases
 from latentoc.jump.robot import JumpRobot

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from latentoc.gpdm import GPDM
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.latent.gp_layer import GPLayer, IdentityLayer, Layer
 from latentoc.latent.residual_layer import ResidualLayer
 
@@ -58,7 +58,7 @@ def latent_path(layer: GPLayer, P: np.ndarray) -> JumpPath:
 
 def joint_range_path(P_joint: np.ndarray, joint_range_deg: float, fixed: np.ndarray) -> JumpPath:
     """The joint spline from the training joints' fit ``P_joint`` (n_control x 37), each free
-    control point within +-``joint_range_deg`` (checked: :func:`latentoc.kind.joint_range`) of it;
+    control point within +-``joint_range_deg`` (checked: :func:`latentoc.problem.kinds.joint_range`) of it;
     the joints ``fixed`` (indices) stay there."""
     P = np.asarray(P_joint, float)
     half = np.full((P.shape[0] - 2, P.shape[1]), np.radians(joint_range_deg))

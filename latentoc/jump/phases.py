@@ -29,7 +29,7 @@ import pinocchio as pin
 
 from latentoc.errors import ProblemError
 from latentoc.mocap.jumps import detect_jumps
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.jump.contact import POINTS, FootGeometry, foot_points, point_joint
 from latentoc.jump.training import JumpTraining
 

@@ -25,11 +25,11 @@ from latentoc.errors import ProblemError, SolveError
 from latentoc.gpdm import GPDM, GPDMSettings, cached_gpdm
 from latentoc.latent.gp_layer import GPLayer, IdentityLayer, Layer
 from latentoc.nlp.blocks import RobotBlock, compile_blocks
-from latentoc.kind import Solution, joint_range
+from latentoc.problem.kinds import Solution, joint_range
 from latentoc.motions.problem_inputs import problem_dir
-from latentoc.problem import Problem, apply_overrides
-from latentoc.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
-from latentoc.tube import TUBE, relative_tube, tube_delta
+from latentoc.problem.declaration import Problem, apply_overrides
+from latentoc.problem.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
+from latentoc.latent.tube import TUBE, relative_tube, tube_delta
 from latentoc.jump.base import base_to_freeflyer
 from latentoc.jump.closure import LegClosure
 from latentoc.jump.cleaning import PlantedTraining, learned_leg, plantable, planted_training
@@ -324,7 +324,7 @@ def _joint_range(problem: Problem, method: str, joint_range_deg: float | None) -
 def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
                        gpdm: GPDM | None = None, verbose: bool = False, warm_start: Solution | None = None,
                        **overrides: Any) -> Solution:
-    """Solve, check on 1 kHz, return a :class:`latentoc.kind.Solution`. ``method``: ``"latent"``,
+    """Solve, check on 1 kHz, return a :class:`latentoc.problem.kinds.Solution`. ``method``: ``"latent"``,
     or ``"joint-range"`` (the 37 joints as the spline, within +-``joint_range_deg`` of the training
     fit; default the problem's ``baseline.joint_range_deg``; no tube, no warm start). ``warm_start``:
     the Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =

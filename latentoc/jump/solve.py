@@ -19,7 +19,7 @@ import pinocchio as pin
 from latentoc.latent.gp_layer import Layer
 from latentoc.nlp import ipopt
 from latentoc.nlp.blocks import RobotBlock
-from latentoc.nlp.exchange import Exchange, exchange_rounds
+from latentoc.nlp.exchange_rounds import Exchange, exchange_rounds
 from latentoc.jump import exchange
 from latentoc.jump.export import trajectory
 from latentoc.jump.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times

@@ -13,7 +13,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from latentoc.latent.gp_layer import Layer
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.jump.contact import EDGES
 from latentoc.jump.flight import ballistic_base, flight_functions
 from latentoc.jump.nlp import JumpNLP

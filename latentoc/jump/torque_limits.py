@@ -21,7 +21,7 @@ import pinocchio as pin
 from scipy.optimize import nnls
 
 from latentoc.errors import ProblemError
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.jump.base import base_to_freeflyer
 from latentoc.jump.contact import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
 from latentoc.jump.training import JumpTraining

@@ -47,7 +47,7 @@ import pinocchio as pin
 from latentoc.jump.contact import MIRROR, POINTS, FootGeometry, foot_points, point_jacobians
 from latentoc.intervals import runs
 from latentoc.min_torque.limits import Limits
-from latentoc.kinematics import point_jacobian
+from latentoc.robots.point_kinematics import point_jacobian
 from latentoc.support_polygon import feet_polygon
 from latentoc.jump.zmp import G, zmp
 

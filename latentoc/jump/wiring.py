@@ -19,7 +19,7 @@ from latentoc.nlp.assemble import Family
 from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.evaluators import BlockEvaluator
 from latentoc.nlp.inputs import NodeInputs
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 from latentoc.jump.phases import Phases
 from latentoc.jump.robot import JumpRobot
 from latentoc.jump.selection import Selection

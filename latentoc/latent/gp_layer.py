@@ -44,7 +44,7 @@ import numpy as np
 from scipy.linalg.blas import dtrmm
 
 from latentoc.gpdm import GPDM
-from latentoc.threads import one_blas_thread
+from latentoc.runtime.threads import one_blas_thread
 
 __all__ = ["GPLayer", "IdentityLayer", "Layer", "LatentMotion"]
 

@@ -3,10 +3,10 @@
 The NLP holds the tube and the joint and velocity limits on its constraint grid and the torque
 limits at its quadrature nodes. After a successful Ipopt run the motion is sampled on the 1 kHz
 grid (:func:`.export.sampled_motion`); the worst time of every stretch where it leaves the tube
-(by more than :data:`~latentoc.nlp.exchange.TUBE_TOL` of delta) or a limit (by more than
+(by more than :data:`~latentoc.nlp.exchange_rounds.TUBE_TOL` of delta) or a limit (by more than
 :data:`LIMIT_TOL`) joins the NLP's nodes (:class:`.nlp.Samples`) and Ipopt resumes from the point
 (the latent method warm, its multipliers carried to the same rows: :func:`carried_multipliers`),
-for at most :data:`EXCHANGE_ROUNDS` runs (the loop: :func:`latentoc.nlp.exchange.exchange_rounds`).
+for at most :data:`EXCHANGE_ROUNDS` runs (the loop: :func:`latentoc.nlp.exchange_rounds.exchange_rounds`).
 """
 from __future__ import annotations
 
@@ -18,10 +18,10 @@ import pinocchio as pin
 
 
 from latentoc.nlp import ipopt
-from latentoc.nlp.exchange import TUBE_TOL, Exchange, exchange_rounds
+from latentoc.nlp.exchange_rounds import TUBE_TOL, Exchange, exchange_rounds
 from latentoc.nlp.curvature import curvature
 from latentoc.nlp.ipopt import IpoptResult
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 from latentoc.results import convergence_entry
 from latentoc.min_torque.export import Solved, sampled_motion
 from latentoc.min_torque.nlp import MinTorqueNLP, Samples, ipopt_options

@@ -3,7 +3,7 @@
 The joint motion is rebuilt along the optimal path through the NLP's layer (the GP mean, or the
 joint spline itself), the torques by Pinocchio's numeric RNEA; the cost is also integrated on that
 grid (trapezoid) to report the quadrature's error. Both methods share :func:`motion_result`;
-the latent solve adds its tube (:mod:`latentoc.tube`).
+the latent solve adds its tube (:mod:`latentoc.latent.tube`).
 """
 from __future__ import annotations
 
@@ -16,10 +16,10 @@ import pinocchio as pin
 from latentoc.latent import Layer
 from latentoc.motions import Demonstration
 from latentoc.nlp.ipopt import IpoptResult
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 from latentoc.robots import describe_robot
-from latentoc.spline import BSpline
-from latentoc.spline_path import trapezoid_cost
+from latentoc.latent.spline import BSpline
+from latentoc.latent.spline_path import trapezoid_cost
 from latentoc.min_torque.goal import goal_error
 from latentoc.min_torque.nlp import MinTorqueNLP
 from latentoc.min_torque.objectives import Objective

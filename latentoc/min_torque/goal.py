@@ -25,7 +25,7 @@ from latentoc.nlp.assemble import Family
 from latentoc.nlp.blocks import RobotBlock, block_inputs
 from latentoc.nlp.evaluators import BlockEvaluator
 from latentoc.nlp.inputs import NodeInputs
-from latentoc.spline_path import SplinePath
+from latentoc.latent.spline_path import SplinePath
 
 __all__ = ["EndGoal", "FreeEndPath", "goal_block", "goal_family", "goal_error"]
 

@@ -1,8 +1,8 @@
-"""The ``"latent-min-torque"`` problem kind (:class:`~latentoc.kind.Kind`): any fixed-base robot's
+"""The ``"latent-min-torque"`` problem kind (:class:`~latentoc.problem.kinds.Kind`): any fixed-base robot's
 minimum-torque motion (Sect. 4.1), in the latent space or, as the baseline, in joint space."""
 from __future__ import annotations
 
-from latentoc.kind import Kind
+from latentoc.problem.kinds import Kind
 from latentoc.min_torque.problem import SCHEMA
 from latentoc.min_torque.solve import METHODS, solve_latent_min_torque
 from latentoc.min_torque.training import tube_reference

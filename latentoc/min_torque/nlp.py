@@ -4,7 +4,7 @@ The objective is J = int_0^T |tau|^2 dt (Eq. 22 with the minimum-torque L of Sec
 Gauss-Legendre quadrature, J = sum_k w_k |tau_k|^2, where tau_k = RNEA(y, yd, ydd) (Eq. 1-2) of
 the joint motion at node k; or another running cost L of :mod:`.objectives`
 (mechanical energy, acceleration). Two methods give the joint motion along a spline path
-(:mod:`latentoc.spline_path`):
+(:mod:`latentoc.latent.spline_path`):
 
 * ``"latent"``: the path is the latent spline x(t) (Eq. 20, 23-25) and the joint motion the
   GPDM mean through it (Eq. 18, 26-28, :class:`~latentoc.latent.GPLayer`); the tube
@@ -35,7 +35,7 @@ from latentoc.nlp.assemble import Family, SparseNLP
 from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.evaluators import BlockEvaluator, MeanEvaluator, VarianceEvaluator
 from latentoc.nlp.inputs import NodeInputs
-from latentoc.spline_path import SplinePath, constraint_times, gauss_legendre_nodes
+from latentoc.latent.spline_path import SplinePath, constraint_times, gauss_legendre_nodes
 from latentoc.min_torque.goal import FreeEndPath, goal_family
 from latentoc.min_torque.limits import Limits
 from latentoc.min_torque.objectives import Objective, velocity_block

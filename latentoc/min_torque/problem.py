@@ -4,7 +4,7 @@ An arm problem file (``problems/arm-raise.toml``) names the robot and the traini
 (registered names or the user's own files, :mod:`latentoc.motions.problem_inputs`: any
 fixed-base robot, its motion read from CSV, NPZ or ASF + AMC, the robot reduced to the joints
 the motion moves), the duration, ``[objective]`` (the running cost, :mod:`.objectives`),
-``[latent]`` (d, the spline and the tube, :mod:`latentoc.tube`), ``[transcription]`` (node
+``[latent]`` (d, the spline and the tube, :mod:`latentoc.latent.tube`), ``[transcription]`` (node
 densities; the joint, velocity and torque limits, :mod:`.limits`), ``[goal]`` (an end-effector
 goal, :mod:`.goal`), ``[solver]``, the baseline's joint range, the sweep's tubes, the start
 poses of Sect. 4.1.4 and ``[gpdm]`` (:class:`~latentoc.gpdm.GPDMSettings`). The measured GPDM
@@ -19,12 +19,12 @@ from latentoc.gpdm import GPDMSettings
 from latentoc.motions import TRAINING
 from latentoc.motions.problem_inputs import check_problem_files
 from latentoc.nlp.ipopt import HESSIANS
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 from latentoc.robots import ROBOT
-from latentoc.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
-from latentoc.sizes import check_memory, spline_transcription_bytes
-from latentoc.spline_path import fixed_rows
-from latentoc.tube import TUBE
+from latentoc.problem.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional, text
+from latentoc.problem.sizes import check_memory, spline_transcription_bytes
+from latentoc.latent.spline_path import fixed_rows
+from latentoc.latent.tube import TUBE
 from latentoc.min_torque.objectives import RUNNING_COSTS, Objective
 from latentoc.min_torque.settings import MinTorqueSettings
 
@@ -46,7 +46,7 @@ def _position(v: object) -> list[float]:
 def check_problem(problem: Problem, where: str) -> None:
     """Checks across settings: enough control points for the degree and the boundary, a goal's
     position with its frame, the files the robot and the training motion name, and sizes that
-    fit in memory (:mod:`latentoc.sizes`)."""
+    fit in memory (:mod:`latentoc.problem.sizes`)."""
     if (problem.goal_frame is None) != (problem.goal_position is None):
         raise ProblemError(f"{where}: [goal] needs both 'goal.frame' and 'goal.position'")
     check_problem_files(problem, where)

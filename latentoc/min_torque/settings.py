@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import pinocchio as pin
 
-from latentoc.problem import Problem
-from latentoc.spline import BSpline
+from latentoc.problem.declaration import Problem
+from latentoc.latent.spline import BSpline
 from latentoc.min_torque.goal import EndGoal
 from latentoc.min_torque.limits import Limits
 from latentoc.min_torque.objectives import Objective
@@ -33,7 +33,7 @@ class MinTorqueSettings:
     @classmethod
     def from_problem(cls, problem: Problem, control_points: int | None = None,
                      duration: float | None = None) -> "MinTorqueSettings":
-        """The settings a :class:`~latentoc.problem.Problem` declares (``control_points`` overrides m,
+        """The settings a :class:`~latentoc.problem.declaration.Problem` declares (``control_points`` overrides m,
         ``duration`` the problem's when it gives none)."""
         m = problem.control_points if control_points is None else control_points
         T = problem.duration if problem.duration is not None else duration

@@ -20,14 +20,14 @@ import pinocchio as pin
 from latentoc.dynamics import SymbolicModel
 from latentoc.errors import SolveError
 from latentoc.gpdm import GPDM
-from latentoc.kind import Solution, joint_range
+from latentoc.problem.kinds import Solution, joint_range
 from latentoc.motions import Demonstration, check_frames
 from latentoc.nlp.blocks import compile_seconds
 from latentoc.motions.problem_inputs import problem_demonstration, require_fixed_base
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 from latentoc.robots import describe_robot
-from latentoc.spline_path import SplinePath
-from latentoc.tube import relative_tube, tube_delta
+from latentoc.latent.spline_path import SplinePath
+from latentoc.latent.tube import relative_tube, tube_delta
 from latentoc.min_torque.exchange import solve_exchanged
 from latentoc.min_torque.export import Solved, motion_result, time_grid
 from latentoc.min_torque.nlp import MinTorqueNLP, Samples, joint_range_nlp, latent_nlp

@@ -15,7 +15,7 @@ from latentoc.gpdm import GPDM, GPDMSettings, cached_gpdm
 from latentoc.gpdm.cache import model_path
 from latentoc.motions import Demonstration
 from latentoc.motions.problem_inputs import problem_demonstration
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 
 __all__ = ["training_frames", "gpdm_settings", "problem_gpdm", "tube_reference"]
 

@@ -1,5 +1,5 @@
 """Acclaim ASF/AMC motion capture: readers, Pinocchio models, jumps, symmetry."""
-from latentoc.mocap.errors import MocapFormatError
+from latentoc.mocap.format_errors import MocapFormatError
 from latentoc.mocap.asf import Bone, Root, Skeleton, parse_asf, read_asf
 from latentoc.mocap.amc import Motion, parse_amc, read_amc
 from latentoc.mocap.skeleton_model import build_model

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from latentoc.mocap.asf import Skeleton
-from latentoc.mocap.errors import MocapFormatError, parse_number
+from latentoc.mocap.format_errors import MocapFormatError, parse_number
 
 
 @dataclass

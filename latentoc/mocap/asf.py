@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from latentoc.mocap.errors import MocapFormatError, parse_number
+from latentoc.mocap.format_errors import MocapFormatError, parse_number
 
 INCH = 0.0254
 DOF_NAMES = ("rx", "ry", "rz", "tx", "ty", "tz", "l")

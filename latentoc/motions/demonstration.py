@@ -32,7 +32,7 @@ import pinocchio as pin
 from latentoc.robots.human_arm import arm_trial
 from latentoc.robots.human_models import broad_jump_training_motion
 from latentoc.robots.urdf import continuous_as_revolute
-from latentoc.schema import Check
+from latentoc.problem.schema import Check
 from latentoc.motions.readers import FORMATS, MotionFileError, RawMotion, read_raw_motion
 
 __all__ = ["Demonstration", "TRAINING", "TRAINING_MOTIONS", "demonstration_from_file", "load_demonstration",

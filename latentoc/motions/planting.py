@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.errors import LatentocError
-from latentoc.kinematics import point_jacobian
+from latentoc.robots.point_kinematics import point_jacobian
 
 __all__ = ["Plant", "PlantingError", "plant", "taper"]
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pinocchio as pin
 
 from latentoc.errors import ProblemError, SolveError
-from latentoc.problem import Problem
+from latentoc.problem.declaration import Problem
 from latentoc.robots.setting import describe_robot, robot_files, robot_from_setting
 from latentoc.motions.demonstration import Demonstration, load_demonstration
 

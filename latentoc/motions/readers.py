@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.errors import LatentocError
-from latentoc.files import NPZ_ERRORS
+from latentoc.runtime.files import NPZ_ERRORS
 from latentoc.mocap import motion_to_q, read_amc, read_asf
 from latentoc.mocap.skeleton_model import joint_q_index
 

@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from latentoc.errors import LatentocError
 from latentoc.intervals import runs
-from latentoc.kinematics import point_jacobian
+from latentoc.robots.point_kinematics import point_jacobian
 
 __all__ = ["Keypoint", "Retargeted", "RetargetError", "retarget", "frame_id", "chain_scale", "resting"]
 

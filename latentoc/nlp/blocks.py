@@ -39,7 +39,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from latentoc.progress import bar
+from latentoc.runtime.progress import bar
 from latentoc.nlp import jit, upgrade
 
 __all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks", "compile_seconds"]

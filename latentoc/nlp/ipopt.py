@@ -16,9 +16,9 @@ from typing import Any, Callable
 import casadi as ca
 import numpy as np
 
-from latentoc.interrupts import deferred, interrupts_seen
-from latentoc.progress import bar
-from latentoc.threads import openblas_threads_at_load
+from latentoc.runtime.interrupts import deferred, interrupts_seen
+from latentoc.runtime.progress import bar
+from latentoc.runtime.threads import openblas_threads_at_load
 from latentoc.nlp.assemble import SparseNLP
 
 __all__ = ["IpoptResult", "solve", "load_ipopt", "HESSIANS", "DEFAULT_OPTIONS", "WARM_START_OPTIONS"]

@@ -22,15 +22,15 @@ from pathlib import Path
 
 import casadi as ca
 
-from latentoc.errors import LatentocError
-from latentoc.files import exclusive_lock
-from latentoc.interrupts import interrupts_seen
-from latentoc.paths import cache_dir
-from latentoc.progress import bar
+from latentoc.runtime.files import exclusive_lock
+from latentoc.runtime.interrupts import interrupts_seen
+from latentoc.runtime.paths import cache_dir
+from latentoc.runtime.progress import bar
+from latentoc.runtime.threads import mapped_threads
 
 CASADI_VERSION: str = getattr(ca, "__version__")  # a key of the cached libraries
 
-__all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "threads", "node_map"]
+__all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "node_map"]
 
 JIT_FLAGS = ("-O1",)  # code evaluated at every Ipopt iteration over many nodes: half the time of -O0
 ONCE_FLAGS = ("-O0",)  # code whose evaluation costs little (one node): the quickest compile
@@ -56,23 +56,14 @@ def enabled() -> bool:
     return os.environ.get("LATENTOC_JIT", "1") != "0"
 
 
-def threads() -> int:
-    """Threads for mapped compiled Functions: ``$LATENTOC_THREADS``, else the CPU count."""
-    n = os.environ.get("LATENTOC_THREADS")
-    if not n:
-        return max(1, os.cpu_count() or 1)
-    if not n.strip().isdigit() or int(n) < 1:
-        raise LatentocError(f"LATENTOC_THREADS must be a positive integer, got {n!r}")
-    return int(n)
-
-
 THREADED_WORK = 2_000_000  # instructions per mapped call below which threads cost more than they share
 
 
 def node_map(f: ca.Function, K: int, instructions: int = 0) -> ca.Function:
-    """``f`` mapped over K nodes, on :func:`threads` threads when f is compiled (in CasADi's
-    virtual machine threads are slower) and the call does enough work (``instructions`` per node)."""
-    n = threads()
+    """``f`` mapped over K nodes, on :func:`~latentoc.runtime.threads.mapped_threads` threads when f
+    is compiled (in CasADi's virtual machine threads are slower) and the call does enough work
+    (``instructions`` per node)."""
+    n = mapped_threads()
     if K > 1 and n > 1 and f.class_name() == "External" and K * instructions >= THREADED_WORK:
         return f.map(K, "thread", min(n, K))
     return f.map(K)
@@ -125,7 +116,7 @@ class Compiler:
 
     def __init__(self, workers: int | None = None):
         self.cc = compiler()
-        self.pool = ThreadPoolExecutor(max_workers=workers or threads())
+        self.pool = ThreadPoolExecutor(max_workers=workers or mapped_threads())
         self.bar = bar(total=0, desc=f"compiling C libraries into {cache_dir()}", unit="lib")
         self.futures: list = []
         if self.cc is None:

@@ -7,14 +7,14 @@ whole set of a result folder from its files alone (``python -m latentoc plot RES
 * :mod:`.latent`: the latent path in its variance tube (equal axes)
 * :mod:`.joints`: joint angles, velocities and torques with their limits
 * :mod:`.stick`: stick frames with their times and a scale
-* :mod:`.contact`: the jump's contact forces, cones, centre of pressure, ZMP and COM margins
+* :mod:`.forces`: the jump's contact forces, cones, centre of pressure, ZMP and COM margins
 * :mod:`.feet`: the feet's contact points by name, frame and offset (shared with the 3-D view)
 * :mod:`.convergence`: Ipopt's per-iteration history
 * :mod:`.studies`: gain against tube size, new start poses
 * :mod:`.kinematics`: the stick figure's bones (shared with the animation and the 3-D view)
 * :mod:`.animation`: the motion as a GIF, and the live 3-D view (meshcat or viser)
 """
-from latentoc.plots.contact import (contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com, polygon_margin,
+from latentoc.plots.forces import (contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com, polygon_margin,
                                     support_vertices)
 from latentoc.plots.convergence import plot_convergence
 from latentoc.plots.feet import ContactPoints, contact_points_of, point_positions, world_forces

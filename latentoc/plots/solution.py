@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 
 from latentoc.results import Result, result_and_output
 from latentoc.plots.animation import animate
-from latentoc.plots.contact import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com
+from latentoc.plots.forces import contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com
 from latentoc.plots.convergence import plot_convergence
 from latentoc.plots.figure import FORMATS, save
 from latentoc.plots.joints import plot_joint_curves, plot_torques, plot_velocities

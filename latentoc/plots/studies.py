@@ -74,7 +74,7 @@ def plot_start_poses(rows: Sequence[Mapping[str, Any]], model: pin.Model | None 
                      axes: Any = None) -> Figure:
     """New start poses against tube size (Fig. 4, 5).
 
-    ``rows`` are :func:`latentoc.start_poses.start_pose_distances` rows (``tube``,
+    ``rows`` are :func:`latentoc.min_torque.start_poses.start_pose_distances` rows (``tube``,
     ``translational_distance`` (Eq. 31), ``pose_distance`` (Eq. 32) and ``q``). Left: the
     distances against delta (Fig. 5). Right, with ``model``: the start poses overlaid, lighter for
     larger tubes (Fig. 4), at equal scale.

@@ -26,7 +26,7 @@ from latentoc.mocap.asf import Skeleton, read_asf
 from latentoc.mocap.configurations import motion_to_q
 from latentoc.mocap.jumps import detect_jumps, jump_window
 from latentoc.mocap.skeleton_model import build_model
-from latentoc.paths import data_dir
+from latentoc.runtime.paths import data_dir
 from latentoc.robots.robot_checks import check_model
 from latentoc.robots.urdf import RobotFileError
 
@@ -38,7 +38,7 @@ AMC_NAME = "01_01.amc"
 
 
 def cmu_file(name: str) -> Path:
-    """A file of ``robots/cmu`` (:func:`latentoc.paths.data_dir`: the checkout's, or the wheel's copy)."""
+    """A file of ``robots/cmu`` (:func:`latentoc.runtime.paths.data_dir`: the checkout's, or the wheel's copy)."""
     return data_dir("robots") / "cmu" / name
 
 

@@ -16,7 +16,7 @@ from typing import Any
 
 import pinocchio
 
-from latentoc.schema import Check
+from latentoc.problem.schema import Check
 from latentoc.robots.catalog import load_robot, robot_names
 from latentoc.robots.human_models import skeleton_chain
 from latentoc.robots.urdf import load_urdf

@@ -9,7 +9,7 @@ one's mirror image in the first frame of q (:func:`mirror_axis`; x in the CMU sk
 frames run along the bones in y), then :func:`check_mirror` compares the right points with the
 mirrored left ones (1 mm). The
 landing distance is the forward travel of the left toe point. Both files are written atomically
-(:func:`latentoc.files.atomic_write`), the arrays first. A fall is a finding, not an error: the
+(:func:`latentoc.runtime.files.atomic_write`), the arrays first. A fall is a finding, not an error: the
 exit code is 0 and ``simulation.json`` says ``"fell": true``.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.errors import LatentocError, ResultFileError, SimulationError
-from latentoc.files import atomic_write, check_out_dir
+from latentoc.runtime.files import atomic_write, check_out_dir
 from latentoc.results import load_result, write_json
 from latentoc.simulate.mjcf import SOLIMP, SOLREF
 

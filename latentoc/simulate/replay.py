@@ -36,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.errors import SimulationError
-from latentoc.progress import bar
+from latentoc.runtime.progress import bar
 from latentoc.simulate.mjcf import base_rotations, dof_order, floating_base, mjcf_from_model, state_from_mujoco, state_to_mujoco
 
 __all__ = ["Simulation", "Gains", "gains", "replay", "summarize", "LOADED", "FALL_HEIGHT", "FALL_TILT_DEG"]

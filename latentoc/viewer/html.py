@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from latentoc.files import NPZ_ERRORS
+from latentoc.runtime.files import NPZ_ERRORS
 from latentoc.results import Result, result_and_output
 from latentoc.viewer.retargeted import retargeted_scene
 from latentoc.viewer.scene import build_scene

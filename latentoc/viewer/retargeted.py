@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.errors import LatentocError
-from latentoc.files import NPZ_ERRORS
+from latentoc.runtime.files import NPZ_ERRORS
 from latentoc.robots.catalog import load_robot
 from latentoc.viewer.geometry import part_poses, robot_parts
 from latentoc.viewer.scene import _part_json, b64, sample_indices

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.plots.contact import contact_series
+from latentoc.plots.forces import contact_series
 from latentoc.plots.feet import MIRROR, contact_points_of, world_forces
 from latentoc.plots.kinematics import floating_base, model_of
 from latentoc.errors import ArgumentError

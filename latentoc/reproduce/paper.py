@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from latentoc.environment import Environment
-from latentoc.problem_files import load_problem
+from latentoc.runtime.environment import Environment
+from latentoc.problem.toml_files import load_problem
 from latentoc.results import Result
 
 __all__ = ["PAPER", "Reproduction", "reproduce", "report", "environment"]
@@ -100,9 +100,9 @@ def reproduce(quick: bool = False, arm: str = "arm-raise", jump: str = "broad-ju
     """Run the experiments (module doc); ``quick``: the arm's tables and Fig. 5 only."""
     from latentoc.min_torque.training import problem_gpdm
     from latentoc.robots import load_robot
-    from latentoc.start_poses import start_pose_distances
-    from latentoc.tube_sweep import sweep
-    from latentoc.tube import resolve_tube
+    from latentoc.min_torque.start_poses import start_pose_distances
+    from latentoc.sweeps import sweep
+    from latentoc.latent.tube import resolve_tube
 
     out = Reproduction()
     problem = load_problem(arm)
@@ -160,7 +160,7 @@ def report(rep: Reproduction) -> str:
     """docs/reproduction.md: each experiment, the paper's numbers and ours side by side."""
     env = rep.environment
     parts = ["# Reproduction of the paper's experiments", "",
-             "Written by `python -m latentoc reproduce` (latentoc.reproduce); every number below is that "
+             "Written by `python -m latentoc reproduce` (latentoc.reproduce.paper); every number below is that "
              "command's output on this machine:", "",
              _table(["", ""], [[k, v] for k, v in env.items()]), ""]
     lat = [r for r in rep.table2 if r.method == "latent"]

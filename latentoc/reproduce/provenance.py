@@ -6,7 +6,7 @@ Python file one of whose functions is called (a profile hook, in every thread; i
 alone does not count, so ``import latentoc`` does not make every module an input) and every file
 opened for reading (an audit hook: problem files, data, shipped models, the viewer's scripts).
 :func:`module_files` adds the modules a piece of code imports by name (a table used as a constant,
-e.g. ``latentoc.reproduce.PAPER``, runs no function). :func:`fingerprint`
+e.g. ``latentoc.reproduce.paper.PAPER``, runs no function). :func:`fingerprint`
 hashes a Python file's code without its docstrings and comments (the AST), any other file's
 bytes, so an edit to a comment does not make an output stale, an edit to the code it ran does.
 :func:`stale` names the inputs that changed since. Files outside the checkout (site-packages, the
@@ -27,9 +27,9 @@ from typing import Any
 __all__ = ["ROOT", "Recorder", "fingerprint", "fingerprints", "module_files", "stale", "uncommitted", "start", "stop"]
 
 #: the source checkout (latentoc is installed editable from it)
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 _SKIP = ("build", ".venv", ".git", "notebooks", "docs")  # not inputs: build trees, environments, outputs
-_RECORDING = ("latentoc/provenance.py", "latentoc/notebooks.py")  # the recording itself, not an input
+_RECORDING = ("latentoc/reproduce/provenance.py", "latentoc/reproduce/notebooks.py")  # the recording itself, not an input
 _ACTIVE: list[set[str]] = []
 _HOOKED = False
 

@@ -22,7 +22,7 @@ from typing import Any
 
 from latentoc.errors import ProblemError, SolveError
 from latentoc.gpdm import GPDM
-from latentoc.schema import Check
+from latentoc.problem.schema import Check
 
 __all__ = ["parse_tube", "TUBE", "resolve_tube", "tube_delta", "relative_tube", "TubeResult"]
 

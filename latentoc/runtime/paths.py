@@ -8,7 +8,7 @@ from pathlib import Path
 
 __all__ = ["data_dir", "cache_dir"]
 
-_PACKAGE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parents[1]  # latentoc/, above runtime/
 
 
 def data_dir(name: str) -> Path:

@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.files import NPZ_ERRORS, dumps_json
-from latentoc.interrupts import finish
+from latentoc.runtime.files import NPZ_ERRORS, dumps_json
+from latentoc.runtime.interrupts import finish
 from latentoc.gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
 from latentoc.motions import Demonstration, check_frames, demonstration_from_file
 from latentoc.results import GPDM_NAME, write_files

@@ -1,4 +1,4 @@
-"""The commands of ``python -m latentoc`` (:mod:`latentoc.cli` parses the command line and calls one).
+"""The commands of ``python -m latentoc`` (:mod:`latentoc.cli.parser` parses the command line and calls one).
 
 Each ``cmd_<name>(args)`` takes the parsed arguments and returns the exit code; an input error is
 a :class:`~latentoc.errors.LatentocError`, which the CLI prints (exit code 2). :func:`summary`
@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from latentoc.errors import LatentocError, SweepError
-from latentoc.files import check_out_dir
-from latentoc.interrupts import finish
+from latentoc.runtime.files import check_out_dir
+from latentoc.runtime.interrupts import finish
 from latentoc.results import Result
 
 __all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
@@ -23,8 +23,8 @@ __all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_vie
 
 
 def tube_arg(text: str) -> float | str:
-    """A tube given on the command line: a number (delta) or "<k>x" (module :mod:`latentoc.tube`)."""
-    from latentoc.tube import parse_tube
+    """A tube given on the command line: a number (delta) or "<k>x" (module :mod:`latentoc.latent.tube`)."""
+    from latentoc.latent.tube import parse_tube
 
     value, relative = parse_tube(text)  # ProblemError (a ValueError) -> argparse message
     return text if relative else value
@@ -39,7 +39,7 @@ def overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
 
 
 def cmd_learn(args: argparse.Namespace) -> int:
-    from latentoc.learned_motion import learn_file
+    from latentoc.cli.learn import learn_file
 
     if args.stride < 1 or args.latent_dim < 1:
         raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
@@ -86,7 +86,7 @@ def cmd_notebooks(args: argparse.Namespace) -> int:
     import time
 
     try:
-        from latentoc.notebooks import check, notebook_paths, run_notebook
+        from latentoc.reproduce.notebooks import check, notebook_paths, run_notebook
         import nbclient  # noqa: F401  (the dev extra's, with nbmake)
     except ImportError:
         raise LatentocError("running the notebooks needs nbclient: pip install -e '.[dev]'") from None
@@ -102,7 +102,7 @@ def cmd_notebooks(args: argparse.Namespace) -> int:
 
 
 def _warn_uncommitted(inputs: dict[str, str]) -> None:
-    from latentoc.provenance import uncommitted
+    from latentoc.reproduce.provenance import uncommitted
 
     dirty = uncommitted(inputs)
     if dirty:
@@ -111,8 +111,8 @@ def _warn_uncommitted(inputs: dict[str, str]) -> None:
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from latentoc.problem import describe_problem
-    from latentoc.problem_files import load_problem, problem_names
+    from latentoc.problem.declaration import describe_problem
+    from latentoc.problem.toml_files import load_problem, problem_names
     if args.robots:
         from latentoc.robots import robot_names
         print("\n".join(robot_names()))
@@ -124,8 +124,8 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from latentoc.problem import describe_problem
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.declaration import describe_problem
+    from latentoc.problem.toml_files import load_problem
     print(describe_problem(load_problem(args.problem)))
     return 0
 
@@ -169,13 +169,13 @@ def summary(r: Result) -> str:
 
 def cmd_solve(args: argparse.Namespace) -> int:
     from latentoc.api import solve
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
 
     problem = load_problem(args.problem, **overrides(args, "tube", "latent_dim", "control_points", "hessian"))
     out = check_out_dir(args.out if args.out is not None else Path("out") / f"{problem.name}-{args.method}")
     gpdm = None
     if args.gpdm is not None:
-        from latentoc.learned_motion import load_gpdm_file
+        from latentoc.cli.learn import load_gpdm_file
         gpdm = load_gpdm_file(args.gpdm)
     r = solve(problem, method=args.method, joint_range_deg=args.joint_range, verbose=args.verbose, gpdm=gpdm)
     print(summary(r))
@@ -216,8 +216,8 @@ def _executor(args: argparse.Namespace) -> Any:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from latentoc.problem_files import load_problem
-    from latentoc.tube_sweep import format_table, sweep, write_sweep
+    from latentoc.problem.toml_files import load_problem
+    from latentoc.sweeps import format_table, sweep, write_sweep
 
     problem = load_problem(args.problem, **overrides(args, "latent_dim", "hessian"))
     if args.tubes == [] or args.ranges == []:
@@ -264,11 +264,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_start_poses(args: argparse.Namespace) -> int:
-    from latentoc.problem_files import load_problem
+    from latentoc.problem.toml_files import load_problem
     from latentoc.results import write_json
     from latentoc.robots import load_robot
-    from latentoc.tube import tube_delta
-    from latentoc.start_poses import start_pose_distances
+    from latentoc.latent.tube import tube_delta
+    from latentoc.min_torque.start_poses import start_pose_distances
 
     problem = load_problem(args.problem, **overrides(args, "latent_dim"))
     if args.out is not None:
@@ -298,11 +298,11 @@ def cmd_start_poses(args: argparse.Namespace) -> int:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from latentoc.reproduce import report, reproduce
+    from latentoc.reproduce.paper import report, reproduce
     from latentoc.results import atomic_write
 
     if args.figures:
-        from latentoc.readme_figures import make_figures
+        from latentoc.reproduce.figures import make_figures
 
         written = make_figures()
         print("wrote " + ", ".join(str(p) for p in written))
@@ -369,7 +369,7 @@ def cmd_retarget(args: argparse.Namespace) -> int:
     import numpy as np
     import pinocchio as pin
 
-    from latentoc.files import atomic_write, dumps_json
+    from latentoc.runtime.files import atomic_write, dumps_json
     from latentoc.motions.retarget_map import load_retarget_map
     from latentoc.motions.retargeting import chain_scale, retarget
     from latentoc.robots.catalog import load_robot

@@ -5,10 +5,10 @@ path to a ``.toml`` file. Three top-level keys are common to every kind::
 
     name = "arm-raise"            # defaults to the file stem
     description = "..."
-    kind = "latent-min-torque"    # a key of latentoc.kinds.KINDS
+    kind = "latent-min-torque"    # a key of latentoc.problem.kinds.KINDS
 
-Every other key belongs to the kind's :class:`~latentoc.schema.Schema` (its
-:class:`~latentoc.kind.Kind`'s), which gives each key's type, range, default and meaning. A key
+Every other key belongs to the kind's :class:`~latentoc.problem.schema.Schema` (its
+:class:`~latentoc.problem.kinds.Kind`'s), which gives each key's type, range, default and meaning. A key
 the kind does not declare is an error naming it and the allowed ones; ``python -m latentoc show
 PROBLEM`` prints every resolved setting. Errors are :class:`~latentoc.errors.ProblemError` naming
 the file and key.
@@ -22,10 +22,10 @@ from pathlib import Path
 from typing import Any
 
 from latentoc.errors import ProblemError
-from latentoc.toml_limits import MAX_BYTES, toml_bounds_problem
-from latentoc.kinds import KINDS, kind_of
-from latentoc.paths import data_dir
-from latentoc.problem import Problem, check_name, checked
+from latentoc.problem.toml_limits import MAX_BYTES, toml_bounds_problem
+from latentoc.problem.kinds import KINDS, kind_of
+from latentoc.runtime.paths import data_dir
+from latentoc.problem.declaration import Problem, check_name, checked
 
 __all__ = ["load_problem", "problem_names", "problems_dir", "problem_from_dict"]
 

@@ -2,7 +2,7 @@
 
 A sweep is a list of :class:`SweepTask`: a latent solve per tube, then, for the arm, a
 full-space baseline solve per joint range. Each task carries its problem as data
-(:meth:`~latentoc.problem.Problem.to_dict`, :func:`~latentoc.problem_files.problem_from_dict`) and :func:`run_task` returns the content of its result
+(:meth:`~latentoc.problem.declaration.Problem.to_dict`, :func:`~latentoc.problem.toml_files.problem_from_dict`) and :func:`run_task` returns the content of its result
 files (:meth:`~latentoc.results.Result.files`), so a worker needs only the installed package.
 
 * Serial (``executor=None``): the tasks run in this process, in order; with ``warm_start`` each
@@ -36,12 +36,12 @@ from typing import Any
 from latentoc.api import solve
 from latentoc.arguments import expect
 from latentoc.errors import ArgumentError, LatentocError, SweepError
-from latentoc.kinds import kind_of
-from latentoc.problem import Problem
-from latentoc.problem_files import problem_from_dict
+from latentoc.problem.kinds import kind_of
+from latentoc.problem.declaration import Problem
+from latentoc.problem.toml_files import problem_from_dict
 from latentoc.errors import ResultFileError
 from latentoc.results import RESULT_NAME, Result, atomic_write, load_result, write_files, write_json
-from latentoc.tube import parse_tube, resolve_tube
+from latentoc.latent.tube import parse_tube, resolve_tube
 
 __all__ = ["SweepTask", "SweepFailure", "SweepResult", "sweep", "sweep_tasks", "run_task", "format_table",
            "write_sweep", "summary_row", "no_worse_than_start"]

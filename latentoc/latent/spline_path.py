@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from latentoc.spline import BSpline
+from latentoc.latent.spline import BSpline
 
 __all__ = ["SplinePath", "fixed_rows", "fit_control_points", "gauss_legendre_nodes", "constraint_times",
            "trapezoid_cost"]

@@ -170,7 +170,7 @@ def _checked(s: Setting, value: Any, where: str) -> Any:
 class Schema:
     """The settings of one problem kind (module doc) and its ``check`` across settings
     (``check(problem, where)`` raises a ProblemError naming ``where``; run on every load and
-    change of a problem, :class:`latentoc.problem.Problem`)."""
+    change of a problem, :class:`latentoc.problem.declaration.Problem`)."""
 
     kind: str
     settings: tuple[Setting | Table, ...]

@@ -33,11 +33,11 @@ class Environment:
         import scipy
 
         from latentoc.version import __version__
-        from latentoc.nlp.jit import threads
+        from latentoc.runtime.threads import mapped_threads
 
         return cls(latentoc=__version__, casadi=casadi.CasadiMeta.version(), pinocchio=getattr(pinocchio, "__version__", "?"),
                    numpy=np.__version__, python=platform.python_version(), cpu=cpu_name(),
-                   cpu_count=os.cpu_count() or 1, threads=threads(), scipy=scipy.__version__)
+                   cpu_count=os.cpu_count() or 1, threads=mapped_threads(), scipy=scipy.__version__)
 
 
 def cpu_name() -> str:

@@ -8,7 +8,7 @@ It solves the README's main problem (``arm-raise``) and the worked example
 * ``panda_view.png``: a still of the 3-D view (``python -m latentoc view``) of the Panda reach, taken
   by headless Chromium;
 * ``figures.json``: each image's SHA-256 and the fingerprints of the checkout's files the command
-  ran and read (:mod:`latentoc.provenance`), so ``tests/test_readme.py`` fails when an image is
+  ran and read (:mod:`latentoc.reproduce.provenance`), so ``tests/test_readme.py`` fails when an image is
   older than the code that makes it.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from latentoc.provenance import ROOT, Recorder
+from latentoc.reproduce.provenance import ROOT, Recorder
 
 __all__ = ["IMAGES", "MANIFEST", "COMMAND", "make_figures", "image_problems"]
 
@@ -70,7 +70,7 @@ def make_figures(out: str | Path = ROOT / "docs" / "images") -> list[Path]:
 
 def image_problems(folder: str | Path = ROOT / "docs" / "images") -> list[str]:
     """Why the images in ``folder`` are not what the command makes from the current code (empty: current)."""
-    from latentoc.provenance import stale
+    from latentoc.reproduce.provenance import stale
 
     folder = Path(folder)
     if not (folder / MANIFEST).is_file():

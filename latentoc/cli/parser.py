@@ -7,7 +7,7 @@ solve that Ipopt does not finish successfully exits with code 1 and writes nothi
 ``--keep-failed``; a sweep with failed or unsuccessful tasks writes the others and exits with
 code 1. Ctrl-C prints ``latentoc: interrupted`` and exits with code 130, writing no result of the
 interrupted solve; a closed stdout (``latentoc list | head``) ends quietly with code 141.
-This module parses the command line; each command is :mod:`latentoc.commands`' ``cmd_<name>``
+This module parses the command line; each command is :mod:`latentoc.cli.commands`' ``cmd_<name>``
 (``simulate``: :func:`latentoc.simulate.command.cmd_simulate`), imported when it runs, so that
 ``--help`` and an arm solve load only what they use.
 """
@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from latentoc.errors import LatentocError
-from latentoc.interrupts import CommandLine
+from latentoc.runtime.interrupts import CommandLine
 
 __all__ = ["main"]
 
@@ -67,7 +67,7 @@ def _solve_arguments(sub: Any) -> None:
     s.add_argument("--hessian", choices=["exact", "lbfgs"], default=None,
                    help="Ipopt's Hessian: exact (CasADi) or its L-BFGS approximation (default: the problem's)")
     s.add_argument("--method", default="latent",
-                   help="a method of the problem's kind: latent (default) or joint-range (latentoc.kinds)")
+                   help="a method of the problem's kind: latent (default) or joint-range (latentoc.problem.kinds)")
     s.add_argument("--joint-range", type=float, default=None, help="baseline joint range, +-deg")
     s.add_argument("--out", type=Path, default=None, help="output folder (default: out/<problem>-<method>)")
     s.add_argument("--quiet", action="store_true", help="no progress display")
@@ -168,7 +168,7 @@ def _reproduce_arguments(sub: Any) -> None:
     r = sub.add_parser("reproduce", help="the paper's Tables 2, 3, 4, 6 and Fig. 5, ours beside the paper's")
     r.add_argument("--quick", action="store_true", help="the arm's tables and Fig. 5 only (no OMPL, no jump)")
     r.add_argument("--figures", action="store_true",
-                   help="instead of the tables: the README's figures in docs/images (latentoc/readme_figures.py)")
+                   help="instead of the tables: the README's figures in docs/images (latentoc/reproduce/figures.py)")
     r.add_argument("--budgets", nargs="*", type=_positive, default=[10.0, 60.0, 300.0],
                    help="the sampling baseline's cumulative wall budgets, s")
     r.add_argument("--out", type=Path, default=Path("docs") / "reproduction.md",
@@ -215,8 +215,8 @@ _ARGUMENTS = (_solve_arguments, _learn_arguments, _plot_arguments, _view_argumen
               _list_arguments, _sweep_arguments, _start_poses_arguments, _reproduce_arguments, _bench_arguments,
               _simulate_arguments, _retarget_arguments)
 
-#: command name -> its implementation, "module:function" (:mod:`latentoc.commands`)
-COMMANDS = {name: f"latentoc.commands:cmd_{name.replace('-', '_')}"
+#: command name -> its implementation, "module:function" (:mod:`latentoc.cli.commands`)
+COMMANDS = {name: f"latentoc.cli.commands:cmd_{name.replace('-', '_')}"
             for name in ("plot", "view", "notebooks", "list", "show", "learn", "solve", "sweep", "reproduce",
                          "start-poses", "bench", "retarget")} | {"simulate": "latentoc.simulate.command:cmd_simulate"}
 
@@ -241,7 +241,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code."""
-    from latentoc.progress import quiet, set_quiet
+    from latentoc.runtime.progress import quiet, set_quiet
 
     session = CommandLine()
     was_quiet = quiet()

@@ -1,9 +1,9 @@
 """A problem as declared: what to optimise, never how (:class:`Problem`).
 
 A problem is a kind's settings, resolved: every key of the kind's
-:class:`~latentoc.schema.Schema` with its value (the file's, an override's or the default),
+:class:`~latentoc.problem.schema.Schema` with its value (the file's, an override's or the default),
 readable by name (``problem.tube``). Problems are read from TOML files by
-:func:`latentoc.problem_files.load_problem`; a change (:meth:`Problem.replace`) is checked like
+:func:`latentoc.problem.toml_files.load_problem`; a change (:meth:`Problem.replace`) is checked like
 the file's keys and the kind's checks across settings. Errors are
 :class:`~latentoc.errors.ProblemError` naming the file and key.
 """
@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from latentoc.errors import ProblemError, SolveError
-from latentoc.schema import Schema
+from latentoc.problem.schema import Schema
 
 __all__ = ["Problem", "check_name", "checked", "apply_overrides", "describe_problem"]
 
@@ -59,7 +59,7 @@ class Problem:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: name, kind, description, source and every setting (read back by
-        :func:`latentoc.problem_files.problem_from_dict`)."""
+        :func:`latentoc.problem.toml_files.problem_from_dict`)."""
         return {"name": self.name, "kind": self.kind, "description": self.description, "source": self.source,
                 "settings": dict(self.settings)}
 

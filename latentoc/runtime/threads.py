@@ -13,6 +13,9 @@ for a busy core. Three places limit it, all through this module:
   load unless the user set it.
 
 Every limit is best effort: without an OpenBLAS in the process nothing changes.
+
+:func:`mapped_threads` is the other thread count: the threads that evaluate the compiled blocks
+mapped over the nodes (``$LATENTOC_THREADS``).
 """
 from __future__ import annotations
 
@@ -23,8 +26,10 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, TypeVar
 
+from latentoc.errors import LatentocError
+
 __all__ = ["BlasHandle", "openblas_handles", "known_openblas_handles", "blas_threads", "one_blas_thread",
-           "openblas_threads_at_load"]
+           "openblas_threads_at_load", "mapped_threads"]
 
 _GET_NAMES = ("openblas_get_num_threads", "openblas_get_num_threads64_",
               "scipy_openblas_get_num_threads", "scipy_openblas_get_num_threads64_")
@@ -108,3 +113,14 @@ def openblas_threads_at_load(n: int = 1) -> Iterator[None]:
     finally:
         if unset:
             del os.environ["OPENBLAS_NUM_THREADS"]
+
+
+def mapped_threads() -> int:
+    """Threads for the compiled blocks mapped over the nodes (:func:`latentoc.nlp.jit.node_map`):
+    ``$LATENTOC_THREADS``, else the CPU count."""
+    n = os.environ.get("LATENTOC_THREADS")
+    if not n:
+        return max(1, os.cpu_count() or 1)
+    if not n.strip().isdigit() or int(n) < 1:
+        raise LatentocError(f"LATENTOC_THREADS must be a positive integer, got {n!r}")
+    return int(n)

@@ -3,7 +3,7 @@ place (in ``notebooks/`` of the source checkout) and records what their outputs 
 
 Each notebook runs top to bottom in a fresh Jupyter kernel with progress bars off
 (``LATENTOC_QUIET=1``: the committed outputs hold figures and numbers, not bar updates); a
-:class:`~latentoc.provenance.Recorder` in the kernel notes the checkout's files whose code ran or
+:class:`~latentoc.reproduce.provenance.Recorder` in the kernel notes the checkout's files whose code ran or
 that were read, and the modules the cells import by name are added. The
 notebook's metadata ``latentoc`` then holds the command that remakes it, the SHA-256 of its code
 cells and those inputs' fingerprints; :func:`check` (``tests/test_notebooks.py``) reports a notebook
@@ -18,14 +18,14 @@ from pathlib import Path
 from typing import Any
 
 from latentoc.errors import LatentocError
-from latentoc.provenance import ROOT, fingerprints, module_files, stale
+from latentoc.reproduce.provenance import ROOT, fingerprints, module_files, stale
 
 __all__ = ["NOTEBOOKS", "notebook_paths", "cells_hash", "run_notebook", "check", "COMMAND"]
 
 NOTEBOOKS = ROOT / "notebooks"
 COMMAND = "python -m latentoc notebooks"
-_START = "import latentoc.provenance\nlatentoc.provenance.start()"
-_STOP = "import json\nimport latentoc.provenance\nprint(json.dumps(latentoc.provenance.stop()))"
+_START = "import latentoc.reproduce.provenance\nlatentoc.reproduce.provenance.start()"
+_STOP = "import json\nimport latentoc.reproduce.provenance\nprint(json.dumps(latentoc.reproduce.provenance.stop()))"
 
 
 def notebook_paths(names: list[str] | None = None) -> list[Path]:
