@@ -64,7 +64,7 @@ TRAJECTORY_KEYS: dict[str, str] = {
     "x_initial": "latent path of the training fit (n x d)",
     "P_initial": "control points of the training fit",
     "q_initial": "configuration along the training fit (n x nq)",
-    # the broad jump: contacts and limits (latentoc.jump.export)
+    # the broad jump: contacts and limits (latentoc.jump.check.export)
     "wrench": "toe-tip wrench of each (symmetric) foot, N and N m (n x 6)",
     "point_forces": "heel, ball, toe and pad forces of each foot (n x 4 x 2)",
     "point_lambda": "friction-pyramid edge weights, body weights (n x 8)",

@@ -38,13 +38,13 @@ def jump_parts(jump_setup):
 def small_jump(jump_parts):
     """A broad-jump NLP with few nodes and every row family (phase 2: distance; every node row,
     contact samples every 50 ms and flight samples every 50 ms with every torque row, the tube) and
-    its training start (:func:`latentoc.jump.start.initial_point`)."""
+    its training start (:func:`latentoc.jump.solve.initial_point.initial_point`)."""
     import numpy as np
 
-    from latentoc.jump.nlp import build_nlp, contact_sample_grid, tube_times
-    from latentoc.jump.selection import Selection
+    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid, tube_times
+    from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.settings import JumpSettings
-    from latentoc.jump.start import initial_point
+    from latentoc.jump.solve.initial_point import initial_point
 
     p = jump_parts
     js = p.js
@@ -61,8 +61,8 @@ def small_jump(jump_parts):
 
 @pytest.fixture(scope="session")
 def small_export(small_jump):
-    """The 1 kHz export (:func:`latentoc.jump.export.trajectory`) of the small NLP's training start."""
-    from latentoc.jump.export import trajectory
+    """The 1 kHz export (:func:`latentoc.jump.check.export.trajectory`) of the small NLP's training start."""
+    from latentoc.jump.check.export import trajectory
 
     sj = small_jump
     return trajectory(sj.robot, sj.layer, sj.js.phases, sj.nlp, sj.x0)

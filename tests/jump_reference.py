@@ -1,7 +1,7 @@
 """Numeric references for the broad jump's row families: Pinocchio on numpy arrays only.
 
 Nothing here uses the row blocks, the flight Functions or the NLP: the full-body state is
-built with :meth:`SymmetryMap.to_full` and :func:`latentoc.jump.base.base_to_freeflyer`
+built with :meth:`SymmetryMap.to_full` and :func:`latentoc.jump.robot.sagittal_base.base_to_freeflyer`
 (checked against Pinocchio's Lie-group difference in test_jump_base), the point forces act
 through ``pinocchio.rnea``'s external forces, and momentum, COM, mass matrix and frames come
 from Pinocchio.
@@ -9,7 +9,7 @@ from Pinocchio.
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.base import base_to_freeflyer
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
 
 SAGITTAL = [0, 2, 4]
 POINT_FRAMES = ("lfoot", "lfoot_end", "ltoes_end", "ltoes_end")  # heel (on the foot), ball, toe tip, pad (on the toes)
@@ -97,7 +97,7 @@ def flight_base(model, data, smap, y, yd, pitch, L, c, cd):
 
 def polygon_rows(heel, toe, p):
     """Rows of the feet's support polygon (vertices heel_R, toe_R, toe_L, heel_L) at p (x, y)."""
-    from latentoc.support_polygon import polygon_from_vertices
+    from latentoc.jump.robot.support_polygon import polygon_from_vertices
 
     A, b = polygon_from_vertices([[heel[0], -heel[1]], [toe[0], -toe[1]], toe[:2], heel[:2]])
     return A @ np.asarray(p, float)[:2] + b

@@ -1,7 +1,7 @@
 """Results built by hand for the tests of the result schema, the plots and the 3-D view (no solve);
 a broad jump in the export's format from the real CMU model and training jump."""
 from __future__ import annotations
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 from functools import lru_cache
 from typing import Any
@@ -42,8 +42,8 @@ SHARES = np.array([0.4, 0.3, 0.2, 0.1])  # of a foot's force: heel, ball, toe, p
 
 @lru_cache(maxsize=4)
 def _jump_arrays(stride: int) -> tuple[pin.Model, dict[str, np.ndarray]]:
-    from latentoc.jump.contact import MU, POINTS, foot_points
-    from latentoc.jump.training import jump_model, training_jumps
+    from latentoc.jump.robot.feet import MU, POINTS, foot_points
+    from latentoc.jump.demonstration.training import jump_model, training_jumps
 
     model, _ = jump_model()
     training = training_jumps()[0]
@@ -82,7 +82,7 @@ def _jump_arrays(stride: int) -> tuple[pin.Model, dict[str, np.ndarray]]:
             share = np.where(loaded[i], SHARES, 0.0) / np.sum(SHARES[loaded[i]])
             fz = max(0.5 * (dh[2] + mass * 9.81), 0.0) * share
             forces[i, :, 1], forces[i, :, 0] = fz, np.clip(0.5 * dh[0] * share, -0.9 * MU * fz, 0.9 * MU * fz)
-        r = P[i] - P[i, 2]  # about the toe point (latentoc.jump.contact.toe_wrench)
+        r = P[i] - P[i, 2]  # about the toe point (latentoc.jump.robot.feet.toe_wrench)
         wrench[i] = [forces[i, :, 0].sum(), 0.0, forces[i, :, 1].sum(), 0.0,
                      float(np.sum(r[:, 2] * forces[i, :, 0] - r[:, 0] * forces[i, :, 1])), 0.0]
     arrays = {"t": t, "q": Q, "v": V, "a": A, "tau": tau, "wrench": wrench, "point_forces": forces,
@@ -98,7 +98,7 @@ def _jump_arrays(stride: int) -> tuple[pin.Model, dict[str, np.ndarray]]:
 
 def jump_trajectory(stride: int = 1) -> tuple[pin.Model, dict[str, np.ndarray]]:
     """The model and ``trajectory.npz`` arrays of a broad jump in the export's format
-    (:func:`latentoc.jump.export.trajectory`), from the real CMU model and training jump (every
+    (:func:`latentoc.jump.check.export.trajectory`), from the real CMU model and training jump (every
     ``stride``-th of its 120 Hz frames): the training jump carried ``JUMP_SHIFT`` further in its
     flight as the optimised motion, the training jump itself as ``q_initial``; each foot's heel,
     ball, toe and pad loaded near the ground, sharing (by ``SHARES``) the ground force the

@@ -151,7 +151,7 @@ def test_solve_summary_reports_the_contact_checks():
     from result_factory import make_result
     from test_jump_verify import _static_arrays
 
-    from latentoc.jump.verify import verify
+    from latentoc.jump.check.verify import verify
 
     model, arrays = _static_arrays()
     arrays["loaded"] = np.ones((len(arrays["t"]), 4), dtype=int)

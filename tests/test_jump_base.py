@@ -2,7 +2,7 @@
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer, freeflyer_to_base
 
 
 def test_velocity_and_acceleration_match_finite_differences():

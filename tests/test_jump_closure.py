@@ -1,4 +1,4 @@
-"""The planted foot by construction (latentoc.jump.closure): the closed legs and the planted base put
+"""The planted foot by construction (latentoc.jump.closure.planted_legs): the closed legs and the planted base put
 the planted body at its ground pose with zero velocity and acceleration, checked with numeric
 Pinocchio (frame placement, velocity and spatial acceleration) on the CMU humanoid and the G1, and the
 closure's velocities and accelerations against finite differences of its positions."""
@@ -7,8 +7,8 @@ import pinocchio as pin
 import pytest
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.jump.base import base_to_freeflyer
-from latentoc.jump.closure import LegClosure
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
+from latentoc.jump.closure.planted_legs import LegClosure
 from latentoc.latent.spline import BSpline
 
 
@@ -98,7 +98,7 @@ def test_closure_velocity_and_acceleration_are_the_time_derivatives_of_its_posit
 def test_g1_sole_held_flat_by_its_hip_roll_yaw_and_ankle_roll():
     """The G1 (a rigid sole, no hinge): its dependent joints and the planted sole's pose, still, for
     sideways-perturbed crouching legs."""
-    from latentoc.jump.legged_robot import robot_model
+    from latentoc.jump.robot.declaration import robot_model
     from tests.test_legged_robot import G1_ROBOT, _declared, _standing
 
     decl = _declared(G1_ROBOT)

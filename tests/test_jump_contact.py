@@ -2,11 +2,11 @@
 import casadi as ca
 import numpy as np
 import pinocchio as pin
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.jump.contact import point_forces
-from latentoc.jump.training import jump_model, training_jumps
+from latentoc.jump.robot.feet import point_forces
+from latentoc.jump.demonstration.training import jump_model, training_jumps
 
 
 def test_pyramid_forces_are_unilateral_and_in_the_cone():
@@ -20,7 +20,7 @@ def test_pyramid_forces_are_unilateral_and_in_the_cone():
 def test_point_forces_act_on_their_own_bodies():
     """Symbolic sum J^T f (heel, ball on the foot, toe and pad on the toes, right foot mirrored) equals
     numeric Pinocchio: rnea with the same forces as external forces on the joints' bodies."""
-    from latentoc.jump.contact import generator_columns, point_generalized_force, point_jacobians
+    from latentoc.jump.robot.feet import generator_columns, point_generalized_force, point_jacobians
 
     model, smap = jump_model()
     tr = training_jumps()[0]
@@ -53,7 +53,7 @@ def test_point_forces_act_on_their_own_bodies():
 
 
 def test_numeric_foot_points_match_the_symbolic_ones():
-    from latentoc.jump.contact import foot_points, points_function
+    from latentoc.jump.robot.feet import foot_points, points_function
 
     model, _ = jump_model()
     tr = training_jumps()[0]
@@ -66,7 +66,7 @@ def test_numeric_foot_points_match_the_symbolic_ones():
 
 
 def test_the_pad_lies_behind_the_toe_tip_on_the_ground_when_standing():
-    from latentoc.jump.contact import foot_points
+    from latentoc.jump.robot.feet import foot_points
 
     model, _ = jump_model()
     q = training_jumps()[0].Q[0]

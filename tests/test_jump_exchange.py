@@ -1,11 +1,11 @@
-"""The exchange's choice of samples (latentoc.jump.exchange) and the selection it grows
-(latentoc.jump.selection), on analytic slack series."""
+"""The exchange's choice of samples (latentoc.jump.solve.exchange) and the selection it grows
+(latentoc.jump.transcription.selection), on analytic slack series."""
 import numpy as np
 import pytest
 
-from latentoc.jump.exchange import TOLERANCE, violated
+from latentoc.jump.solve.exchange import TOLERANCE, violated
 from latentoc.nlp.exchange_rounds import worst_times
-from latentoc.jump.selection import Selection
+from latentoc.jump.transcription.selection import Selection
 
 
 def test_a_stretch_near_its_bound_gets_its_least_slack_and_a_sample_every_spacing():
@@ -54,14 +54,14 @@ def test_selections_merge_by_time_and_row():
 
 
 def test_clearance_on_the_1khz_grid_is_the_height_rows_slack(small_jump):
-    """The 1 kHz clearance (latentoc.jump.exchange.clearance, numeric Pinocchio on the export) equals,
+    """The 1 kHz clearance (latentoc.jump.solve.exchange.clearance, numeric Pinocchio on the export) equals,
     at every contact sample, the slack of that sample's height rows in the NLP (CasADi), point by
     point; it is NaN in flight and for the loaded points, whose placement the closure holds: on the
     export they stay at their standing height to 1e-9 m."""
-    from latentoc.jump.contact import POINTS
-    from latentoc.jump.exchange import clearance
-    from latentoc.jump.export import trajectory
-    from latentoc.jump.verify import series
+    from latentoc.jump.robot.feet import POINTS
+    from latentoc.jump.solve.exchange import clearance
+    from latentoc.jump.check.export import trajectory
+    from latentoc.jump.check.verify import series
 
     sj = small_jump
     jn, ph, x = sj.nlp, sj.js.phases, np.asarray(sj.x0, float)

@@ -1,12 +1,12 @@
-"""The 1 kHz export (latentoc.jump.export): its motion's derivatives and the contact forces between
+"""The 1 kHz export (latentoc.jump.check.export): its motion's derivatives and the contact forces between
 the NLP's nodes and samples (corrected_edge_weights)."""
 import numpy as np
 import pinocchio as pin
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
-from latentoc.jump.contact import generator_columns, point_jacobians
-from latentoc.jump.export import corrected_edge_weights
-from latentoc.jump.training import jump_model, training_jumps
+from latentoc.jump.robot.feet import generator_columns, point_jacobians
+from latentoc.jump.check.export import corrected_edge_weights
+from latentoc.jump.demonstration.training import jump_model, training_jumps
 
 
 def _static():
@@ -71,7 +71,7 @@ def test_the_toe_tip_stands_at_its_ground_point_in_both_contact_phases(small_jum
     """Numeric Pinocchio on the 1 kHz export: the left toe tip stands at its standing x in the stance
     and at the landing's x_L from the touchdown on (Phases.standing/landed with the events' own
     instants, FootGeometry.planted_shift)."""
-    from latentoc.jump.phases import toe_path
+    from latentoc.jump.schedule.phases import toe_path
 
     tr, ph, geom = small_export, small_jump.js.phases, small_jump.robot.geom
     t = tr["t"]

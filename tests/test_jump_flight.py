@@ -1,9 +1,9 @@
-"""Ballistic flight (latentoc.jump.flight) against numeric Pinocchio: zero base wrench in flight."""
+"""Ballistic flight (latentoc.jump.closure.ballistic) against numeric Pinocchio: zero base wrench in flight."""
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.base import base_to_freeflyer
-from latentoc.jump.flight import ballistic_base, cumulative_trapezoid_matrix, flight_functions
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
+from latentoc.jump.closure.ballistic import ballistic_base, cumulative_trapezoid_matrix, flight_functions
 from latentoc.latent.gp_layer import GPLayer
 from latentoc.latent.spline import BSpline
 

@@ -1,4 +1,4 @@
-"""The broad jump in the full configuration space (method "joint-range", latentoc.jump.path): the
+"""The broad jump in the full configuration space (method "joint-range", latentoc.jump.schedule.path): the
 same NLP with the 37 learned joints as the spline (the identity layer), on a jump with few nodes.
 
 Its exact Jacobian and Hessian against central differences along random directions and along
@@ -17,12 +17,12 @@ from finite_differences import central4, dense
 def full_jump(jump_parts):
     """The small jump's NLP (tests/conftest.py's small_jump settings) along the joint spline within
     +-30 deg of the training joints' fit, and its training start."""
-    from latentoc.jump.nlp import build_nlp, contact_sample_grid
-    from latentoc.jump.path import joint_range_path
-    from latentoc.jump.selection import Selection
+    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid
+    from latentoc.jump.schedule.path import joint_range_path
+    from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.settings import JumpSettings
-    from latentoc.jump.start import initial_point
-    from latentoc.jump.training import antisymmetric_centre
+    from latentoc.jump.solve.initial_point import initial_point
+    from latentoc.jump.demonstration.training import antisymmetric_centre
 
     p = jump_parts
     js, robot = p.js, p.robot
@@ -103,8 +103,8 @@ def test_full_space_start_is_the_training_joints_fit(full_jump):
     to 2.5 deg RMS each, the antisymmetric centre joints at zero; the free control points are
     bounded to +-30 deg of the fit (the antisymmetric ones fixed), every other variable as in the
     latent NLP; no tube rows."""
-    from latentoc.jump.nlp import build_nlp
-    from latentoc.jump.training import antisymmetric_centre
+    from latentoc.jump.transcription.nlp import build_nlp
+    from latentoc.jump.demonstration.training import antisymmetric_centre
 
     p, path, jn, x0 = full_jump.p, full_jump.path, full_jump.nlp, full_jump.x0
     js = p.js
@@ -136,9 +136,9 @@ def test_full_space_start_is_the_training_joints_fit(full_jump):
 
 def test_joint_path_refuses_tube_points(full_jump):
     """A selection with tube points cannot be built along the joint path (no sigma^2 there)."""
-    from latentoc.jump.nlp import build_nlp
+    from latentoc.jump.transcription.nlp import build_nlp
 
-    from latentoc.jump.selection import Selection
+    from latentoc.jump.transcription.selection import Selection
 
     f = full_jump
     with_tube = f.nlp.selection.merged(Selection.empty(12, f.p.robot.unmirrored.size, np.array([0.5])))

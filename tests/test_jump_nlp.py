@@ -1,4 +1,4 @@
-"""The assembled broad-jump NLP (latentoc.jump.nlp.build_nlp) on a jump with few nodes (every
+"""The assembled broad-jump NLP (latentoc.jump.transcription.nlp.build_nlp) on a jump with few nodes (every
 row family, wrench samples every 50 ms): its exact derivatives against central differences, its
 bounds and objectives, and its rows' identity across sample sets (the warm start's multipliers).
 
@@ -86,9 +86,9 @@ def test_point_and_multipliers_follow_their_rows_into_an_nlp_with_more_samples(s
     round, jump.warm): the shared variables keep their values, each carried row has the same value
     there, the new samples' rows get zero multipliers and hold at the carried point (their
     variables follow from the rest), and lam . g is unchanged."""
-    from latentoc.jump.nlp import build_nlp
-    from latentoc.jump.selection import Selection
-    from latentoc.jump.warm import carried_multipliers, carried_point
+    from latentoc.jump.transcription.nlp import build_nlp
+    from latentoc.jump.transcription.selection import Selection
+    from latentoc.jump.solve.warm import carried_multipliers, carried_point
 
     sj = small_jump
     old = sj.nlp
@@ -129,8 +129,8 @@ def test_row_and_variable_bounds(small_jump):
     point above the ground), the centre of pressure by the loaded support, the transitions as
     equalities, polygons, flight clearance and tube one-sided as the module doc says; edge
     weights >= 0 and zero on the unloaded points."""
-    from latentoc.jump.contact import POINTS
-    from latentoc.jump.nlp import TORQUE_BACKOFF, TUBE_BACKOFF
+    from latentoc.jump.robot.feet import POINTS
+    from latentoc.jump.transcription.nlp import TORQUE_BACKOFF, TUBE_BACKOFF
 
     sj = small_jump
     jn, robot, ph = sj.nlp, sj.robot, sj.js.phases
@@ -180,7 +180,7 @@ def test_objectives(small_jump):
     """Objective "distance": minus the landing point x_L (Eq. 33) plus the tiny force regulariser;
     "feasibility": the squared deviation of the free latent control points from the training
     fit (zero at the start) plus the same regulariser; another objective is refused by name."""
-    from latentoc.jump.nlp import FORCE_REGULARISATION, build_nlp
+    from latentoc.jump.transcription.nlp import FORCE_REGULARISATION, build_nlp
 
     sj = small_jump
     parts = sj.nlp.variables.unpack(sj.x0)

@@ -1,10 +1,10 @@
 """Phase timing of the symmetric training jump (Sect. 4.2: 1.3 s), checked against the data."""
 import numpy as np
 
-from latentoc.jump.legged_robot import CMU_HUMANOID
-from latentoc.jump.phases import toe_heights, training_phases
+from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.schedule.phases import toe_heights, training_phases
 from latentoc.mocap.jumps import detect_jumps
-from latentoc.jump.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import jump_model, training_jumps
 
 
 def test_phases_and_grid():
@@ -30,8 +30,8 @@ def test_contact_schedule_follows_the_training_heel_and_ball():
     checked against their heights recomputed from the frames with numeric Pinocchio."""
     import pinocchio as pin
 
-    from latentoc.jump.contact import foot_points
-    from latentoc.jump.phases import CONTACT_HEIGHT
+    from latentoc.jump.robot.feet import foot_points
+    from latentoc.jump.schedule.phases import CONTACT_HEIGHT
 
     model, _ = jump_model()
     tr = training_jumps()[0]

@@ -1,6 +1,6 @@
 """The broad-jump problem kind (latentoc.jump.problem): [options], warm and cold starts, set-up."""
 from types import SimpleNamespace
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 import dataclasses
 
@@ -9,7 +9,7 @@ import pytest
 
 import latentoc.jump.problem as jp
 from latentoc.jump.settings import JumpSettings
-from latentoc.jump.solve import JumpSolution, solve_jump
+from latentoc.jump.solve.solve import JumpSolution, solve_jump
 from latentoc.nlp.ipopt import IpoptResult
 from latentoc.problem.toml_files import load_problem
 from latentoc.errors import SolveError
@@ -174,7 +174,7 @@ def test_training_stride_learns_every_kth_frame(training, stride, n_points):
     """The GPDM learns every stride-th frame of each jump: its mean at the learned latent points
     gives back those captured frames (RMS within 3 % of their range: the converged model keeps a
     noise level, docs/gpdm.md), and the Eq. 30 tube of the ten jumps holds every jump's latent points."""
-    from latentoc.jump.training import training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
 
     js = jp.setup(training, stride=stride)
     gp = js.gpdm
@@ -187,12 +187,12 @@ def test_training_stride_learns_every_kth_frame(training, stride, n_points):
 
 
 def test_plant_training_learns_and_limits_the_planted_jump():
-    """plant_training: the GPDM learns the planted jump (latentoc.jump.cleaning, tested in
+    """plant_training: the GPDM learns the planted jump (latentoc.jump.demonstration.planted, tested in
     test_planting.py), whose largest change per leg joint the set-up keeps, and the Eq. 34 limits
     are the planted jump's own inverse dynamics: every torque of its B-spline fit lies inside them."""
-    from latentoc.jump.cleaning import planted_training
-    from latentoc.jump.phases import training_phases
-    from latentoc.jump.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.planted import planted_training
+    from latentoc.jump.schedule.phases import training_phases
+    from latentoc.jump.demonstration.training import jump_model, training_jumps
 
     js = jp.setup(0, stride=3, plant=True)
     model, smap = jump_model()

@@ -3,7 +3,7 @@
 Every row family is read from the assembled NLP (so the node inputs are checked with the
 blocks) at the training start of a jump with few nodes: the joint motion of the GP layer along
 the training fit's latent path, in the contact phases with the legs closed and the base from the
-planted body (latentoc.jump.closure, itself checked here by the planted body's numeric placement).
+planted body (latentoc.jump.closure.planted_legs, itself checked here by the planted body's numeric placement).
 The flight samples are placed at times of the 1 kHz export of that start and checked on its
 exported motion. References: ``pinocchio.rnea`` (with the point forces as external
 forces), frame placements and Jacobians, the COM, the centroidal momentum and its rate, the
@@ -17,9 +17,9 @@ from scipy.integrate import cumulative_trapezoid
 
 from jump_reference import (SAGITTAL, flight_base, foot_points, full_state, generalized_force, joint_motion,
                             mass_of, momentum, pitch_rate_for, point_forces, polygon_rows)
-from latentoc.jump.base import freeflyer_to_base
-from latentoc.jump.nlp import build_nlp
-from latentoc.jump.zmp import G
+from latentoc.jump.robot.sagittal_base import freeflyer_to_base
+from latentoc.jump.transcription.nlp import build_nlp
+from latentoc.jump.robot.zmp import G
 
 GRAVITY = np.array([0.0, -9.81])
 
@@ -256,7 +256,7 @@ def test_flight_rows_are_numeric_pinocchio_on_the_exported_flight(small_jump, sm
     (q, v, a) over their range (the block computes the motion about the base at zero pitch and
     position); the exported flight is ballistic (no base wrench), its base continuous at takeoff
     and off the landing's by the touchdown rows at touchdown."""
-    from latentoc.jump.warm import carried_point
+    from latentoc.jump.solve.warm import carried_point
 
     sj, tr = small_jump, small_export
     model, ph, robot = sj.js.model, sj.js.phases, sj.robot

@@ -1,10 +1,10 @@
-"""The training start (latentoc.jump.start.initial_point, balanced_forces) and the smoothed
-initial latent path (latentoc.jump.path.initial_latent_path)."""
+"""The training start (latentoc.jump.solve.initial_point.initial_point, balanced_forces) and the smoothed
+initial latent path (latentoc.jump.schedule.path.initial_latent_path)."""
 import numpy as np
 import pinocchio as pin
 
 from jump_reference import SAGITTAL, generalized_force, point_forces
-from latentoc.jump.start import balanced_forces
+from latentoc.jump.solve.initial_point import balanced_forces
 
 
 def _node_base_rows(sj, parts, t):
@@ -76,7 +76,7 @@ def test_balanced_forces_fit_the_base_rows_with_nonnegative_loaded_edges(small_j
 def test_initial_latent_path_keeps_the_kept_state_and_smooths_the_rest():
     """Equality-constrained smoothing: at the kept times the value and velocity equal the plain
     fit's (to solver precision), the end control points stay, and the curvature integral drops."""
-    from latentoc.jump.path import initial_latent_path
+    from latentoc.jump.schedule.path import initial_latent_path
     from latentoc.latent.spline import BSpline
 
     sp = BSpline(15, 1.3)

@@ -2,7 +2,7 @@
 import casadi as ca
 import numpy as np
 
-from latentoc.support_polygon import margin, support_polygon, symbolic_rows
+from latentoc.jump.robot.support_polygon import margin, support_polygon, symbolic_rows
 
 
 def test_rectangle_inside_outside():

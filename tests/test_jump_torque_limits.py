@@ -1,10 +1,10 @@
 """Training inverse dynamics: NNLS contact forces reproduce the base wrench where they can."""
 import numpy as np
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
-from latentoc.jump.phases import training_phases
-from latentoc.jump.torque_limits import estimate_training_dynamics
-from latentoc.jump.training import jump_model, training_jumps
+from latentoc.jump.schedule.phases import training_phases
+from latentoc.jump.robot.torque_limits import estimate_training_dynamics
+from latentoc.jump.demonstration.training import jump_model, training_jumps
 
 
 def test_training_forces_and_limits():

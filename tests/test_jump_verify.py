@@ -1,15 +1,15 @@
 """1 kHz verification machinery on an exactly balanced static stance, and (opt-in) a quick solve."""
 import os
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from latentoc.jump.contact import FootGeometry
-from latentoc.jump.training import jump_model, training_jumps
-from latentoc.jump.export import contact_geometry
-from latentoc.jump.verify import sagittal_contact_wrench, verify
+from latentoc.jump.robot.feet import FootGeometry
+from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.check.export import contact_geometry
+from latentoc.jump.check.verify import sagittal_contact_wrench, verify
 
 
 def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
@@ -100,7 +100,7 @@ def test_point_forces_on_their_bodies_balance_a_static_stance():
     base rows, verify finds the base balanced, the points in the cone and the torques consistent."""
     from scipy.optimize import nnls
 
-    from latentoc.jump.contact import generator_columns, point_forces, point_jacobians
+    from latentoc.jump.robot.feet import generator_columns, point_forces, point_jacobians
 
     model, arrays = _static_arrays()
     q = arrays["q"][0]
@@ -154,7 +154,7 @@ def test_eq33_feet_distance_of_a_translating_stance():
     # with point forces (the heel and the toe point pushing back, the ball and the pad unloaded) every
     # loaded point slides 2 mm along x at its standing height, and the ground does -(sum fx) 0.5 m/s
     # 4 ms of work on both feet (numeric forward kinematics for the heights)
-    from latentoc.jump.contact import foot_points
+    from latentoc.jump.robot.feet import foot_points
 
     F = np.zeros((len(t), 4, 2))
     F[:, 0], F[:, 2] = (-60.0, 300.0), (-20.0, 100.0)
@@ -180,7 +180,7 @@ def test_contact_kinematics_of_sliding_and_stuck_points():
     none in x); point 3 is never loaded and dips 0.1 mm into the ground at one sample, pushed along
     its motion by a force below the load threshold (positive work, 2 fx 0.05 m/s T). Out of contact
     nothing is loaded."""
-    from latentoc.jump.verify import LOADED, contact_kinematics
+    from latentoc.jump.check.verify import LOADED, contact_kinematics
 
     W = 600.0
     t = np.linspace(0.0, 0.2, 201)

@@ -2,8 +2,8 @@
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.training import jump_model, training_jumps
-from latentoc.jump.zmp import G, zmp
+from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.robot.zmp import G, zmp
 
 
 def test_static_pose_zmp_is_projected_com():

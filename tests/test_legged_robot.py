@@ -1,4 +1,4 @@
-"""The contact kind's robot from a problem file's ``[robot]`` (latentoc.jump.legged_robot): the CMU
+"""The contact kind's robot from a problem file's ``[robot]`` (latentoc.jump.robot.declaration): the CMU
 humanoid and the Unitree G1 built from their declarations, the G1's contact rows against numeric
 Pinocchio, and bad declarations refused with the key named."""
 import tomllib
@@ -11,14 +11,14 @@ import pytest
 
 from latentoc.dynamics import SymbolicModel
 from latentoc.errors import ProblemError
-from latentoc.jump.closure import LegClosure
-from latentoc.jump.contact import foot_points, point_forces
-from latentoc.jump.legged_robot import CMU_HUMANOID, declaration, robot_model
+from latentoc.jump.closure.planted_legs import LegClosure
+from latentoc.jump.robot.feet import foot_points, point_forces
+from latentoc.jump.robot.declaration import CMU_HUMANOID, declaration, robot_model
 from latentoc.jump.problem import SCHEMA
-from latentoc.jump.robot import JumpRobot
+from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.rows.contact import block
-from latentoc.jump.torque_limits import urdf_torque_limits
-from latentoc.jump.zmp import G
+from latentoc.jump.robot.torque_limits import urdf_torque_limits
+from latentoc.jump.robot.zmp import G
 
 G1_ROBOT = """
 [robot]
@@ -78,7 +78,7 @@ def test_g1_contact_rows_from_its_declaration_against_numeric_pinocchio():
     lam = rng.uniform(0, 0.2, 8)
     shift = 0.05
     F = np.array(blk.rows_sx(y, yd, ydd, np.concatenate([[shift, 0.0], lam]))).ravel()
-    # numeric reference: the closed legs on the planted base (latentoc.jump.closure, tested on its own),
+    # numeric reference: the closed legs on the planted base (latentoc.jump.closure.planted_legs, tested on its own),
     # rnea with the point forces as external forces
     yc, ydc, yddc, b, bd, bdd = (u[0] for u in closure.evaluate(y[None], yd[None], ydd[None], [0.0], [shift]))
     q, v, a = (np.array(ca.evalf(x)).ravel() for x in robot.configuration(b, bd, bdd, yc, ydc, yddc))
@@ -147,8 +147,8 @@ def test_g1_training_from_its_retargeted_demonstration():
     at touchdown)."""
     from pathlib import Path
 
-    from latentoc.jump.phases import toe_heights, training_phases
-    from latentoc.jump.training import motion_training
+    from latentoc.jump.schedule.phases import toe_heights, training_phases
+    from latentoc.jump.demonstration.training import motion_training
 
     p = _g1_problem()
     decl = declaration(p.settings)
@@ -221,7 +221,7 @@ def test_g1_joint_bounds_hold_every_urdf_limit_of_both_legs_and_arms():
 
 
 def test_joint_limit_excess_is_the_worst_overshoot_of_the_recorded_limits():
-    from latentoc.jump.verify import joint_limit_excess
+    from latentoc.jump.check.verify import joint_limit_excess
 
     q = np.array([[0, 0, 0, 0, 0, 0, 1, 0.5, -0.2], [0, 0, 0, 0, 0, 0, 1, 1.3, -0.1]])
     v = np.array([[0, 0, 0, 0, 0, 0, 2.0, 0.0], [0, 0, 0, 0, 0, 0, -3.5, 1.0]])
@@ -238,7 +238,7 @@ def _g1_smap():
 
 
 def _g1_training():
-    from latentoc.jump.training import motion_training
+    from latentoc.jump.demonstration.training import motion_training
 
     decl = declaration(_g1_problem().settings)
     model, smap = robot_model(decl)
@@ -247,7 +247,7 @@ def _g1_training():
 
 
 def test_a_declared_schedule_replaces_the_detected_times_and_settles_after_its_touchdown():
-    from latentoc.jump.phases import training_phases
+    from latentoc.jump.schedule.phases import training_phases
 
     model, tr, geom = _g1_training()
     detected = training_phases(model, tr, geom)
@@ -260,7 +260,7 @@ def test_a_declared_schedule_replaces_the_detected_times_and_settles_after_its_t
 @pytest.mark.parametrize("declared, key", [({"takeoff": 0.8}, "takeoff"), ({"heel_off": 0.3, "ball_off": 0.25}, "ball_off"),
                                            ({"touchdown": 0.2}, "touchdown"), ({"heel_strike": 1.5}, "heel_strike")])
 def test_a_schedule_out_of_order_is_refused_naming_its_key(declared, key):
-    from latentoc.jump.phases import training_phases
+    from latentoc.jump.schedule.phases import training_phases
 
     model, tr, geom = _g1_training()
     with pytest.raises(ProblemError, match=rf"schedule\.{key}"):
@@ -269,11 +269,11 @@ def test_a_schedule_out_of_order_is_refused_naming_its_key(declared, key):
 
 def test_planting_a_rigid_sole_holds_it_flat_then_pivots_it_on_its_toe_tip():
     """The G1's symmetric demonstration slides its feet 24 mm sideways (the base's sway projected
-    away); planted (latentoc.jump.cleaning, a rigid sole: no hinge) every sole point stays at its
+    away); planted (latentoc.jump.demonstration.planted, a rigid sole: no hinge) every sole point stays at its
     standing place while the heel is loaded and the toe tip alone while the foot pivots, by numeric
     forward kinematics; only the left leg's joints and the sagittal base change."""
-    from latentoc.jump.cleaning import foot_bodies, planted_training
-    from latentoc.jump.phases import training_phases
+    from latentoc.jump.demonstration.planted import foot_bodies, planted_training
+    from latentoc.jump.schedule.phases import training_phases
 
     model, tr, geom = _g1_training()
     assert foot_bodies(model, geom) == ("left_ankle_roll_link", None)

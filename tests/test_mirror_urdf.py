@@ -76,7 +76,7 @@ def test_a_joint_without_partner_is_refused_by_name():
 def test_the_leg_of_a_foot_is_the_chain_of_joints_above_it():
     """The joints a planting may change (jump.cleaning.leg_joints): the G1's left leg, base to foot,
     found from the kinematic tree, against its joints named left_hip/knee/ankle."""
-    from latentoc.jump.cleaning import leg_joints
+    from latentoc.jump.demonstration.planted import leg_joints
 
     model = load_robot("g1")
     leg = leg_joints(model, "left_ankle_roll_link")

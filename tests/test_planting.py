@@ -1,9 +1,9 @@
-"""Planted feet (latentoc.motions.planting, latentoc.jump.cleaning): the planted frames sit exactly at
+"""Planted feet (latentoc.motions.planting, latentoc.jump.demonstration.planted): the planted frames sit exactly at
 their targets, the other frames keep the capture, and each frame's change is the least one (its
 weighted change lies in the row space of the constraint Jacobian: no move along the constraint's
 null space makes it smaller)."""
 from __future__ import annotations
-from latentoc.jump.legged_robot import CMU_HUMANOID
+from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 import numpy as np
 import pinocchio as pin
@@ -14,14 +14,14 @@ from latentoc.motions.planting import Plant, PlantingError, plant, taper
 
 @pytest.fixture(scope="module")
 def captured():
-    from latentoc.jump.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import jump_model, training_jumps
 
     model, smap = jump_model()
     return model, smap, training_jumps(0)[0]
 
 
 def _leg_v(model):
-    from latentoc.jump.cleaning import leg_joints
+    from latentoc.jump.demonstration.planted import leg_joints
 
     return np.array([model.joints[model.getJointId(n)].idx_v for n in leg_joints(model, "ltoes")])
 
@@ -87,10 +87,10 @@ def test_cleaned_training_keeps_the_feet_on_their_ground_points():
     """The planted training jump (what the GPDM learns): in every contact frame the toe and pad
     points (the toes flat) are on their standing (or landing) ground points to 1e-9 m, also while
     the captured toes rolled on their tip; while the heel is loaded the heel too."""
-    from latentoc.jump.cleaning import planted_training
-    from latentoc.jump.contact import POINTS, foot_points
-    from latentoc.jump.phases import training_phases
-    from latentoc.jump.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.planted import planted_training
+    from latentoc.jump.robot.feet import POINTS, foot_points
+    from latentoc.jump.schedule.phases import training_phases
+    from latentoc.jump.demonstration.training import jump_model, training_jumps
 
     model, smap = jump_model()
     tr = training_jumps(0)[0]

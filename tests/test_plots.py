@@ -214,7 +214,7 @@ def test_convergence_draws_each_run_after_the_previous(tmp_path):
 def test_contact_series_of_a_static_stance():
     """A pose held still on both feet: the ZMP is the COM's ground projection (Eq. 35 with dh = 0),
     inside the feet's polygon by the COM's margin; the friction ratio is the wrench's."""
-    from latentoc.jump.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import jump_model, training_jumps
 
     model, _ = jump_model()
     q = training_jumps()[0].Q[0]
@@ -245,9 +245,9 @@ def test_contact_series_of_a_static_stance():
 
 def test_contact_series_agrees_with_the_jumps_own_check(small_export, small_jump):
     """On the broad jump's 1 kHz export: the ZMP and COM margins of the plots (from the result schema:
-    the polygon of both feet's heel and toe tip, their own ZMP) against latentoc.jump.verify.series
+    the polygon of both feet's heel and toe tip, their own ZMP) against latentoc.jump.check.verify.series
     (the left foot mirrored: the feet agree to a fraction of a millimetre), in the same windows."""
-    from latentoc.jump.verify import series
+    from latentoc.jump.check.verify import series
 
     model = small_jump.js.model
     traj = {**small_export, "friction": 0.4}
@@ -267,7 +267,7 @@ def test_every_contact_point_of_the_jump_is_drawn(tmp_path):
     figures carry each point's force and friction ratio by name; the support polygon's corners are
     the heels and toe points where the jump's own code puts them; the centre of pressure is the
     wrench's, between heel and toe point."""
-    from latentoc.jump.contact import FootGeometry, foot_points
+    from latentoc.jump.robot.feet import FootGeometry, foot_points
 
     model, traj = jump_trajectory()
     s = plots.contact_series(model, traj)

@@ -74,7 +74,7 @@ def test_the_frame_jacobian_matches_finite_differences():
 def test_cmu_jump_on_the_g1_keeps_limits_ground_and_planted_feet():
     """The stance of the CMU jump on the G1 with the shipped map: every joint inside the URDF's limits,
     no foot point below the ground, the planted toe points still (to the residual) while planted."""
-    from latentoc.jump.training import training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
 
     spec = load_retarget_map(G1_MAP)
     source, g = load_robot(spec.source), load_robot(spec.target)

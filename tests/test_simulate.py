@@ -21,7 +21,7 @@ FEET = ["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]
 
 
 def _cmu():
-    from latentoc.jump.training import jump_model
+    from latentoc.jump.demonstration.training import jump_model
 
     return jump_model()[0]
 

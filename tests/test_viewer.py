@@ -19,7 +19,7 @@ from browser import chromium, dom, screenshot
 from result_factory import jump_trajectory, make_jump_result, make_result
 
 from latentoc.cli.parser import main
-from latentoc.jump.contact import MIRROR, FootGeometry, foot_points
+from latentoc.jump.robot.feet import MIRROR, FootGeometry, foot_points
 from latentoc.plots import skeleton_segments
 from latentoc.robots import example_robot_data_dir, load_robot, robot_urdf
 from latentoc.viewer import build_scene, page_html, part_poses, robot_parts, write_html
@@ -89,7 +89,7 @@ def test_skeleton_capsules_lie_on_the_bones():
 
 def jumps_own_points(model: pin.Model, traj: dict, Q: np.ndarray) -> np.ndarray:
     """(n, 8, 3): the left foot's heel, ball, toe, pad by the jump's own code
-    (:func:`latentoc.jump.contact.foot_points`), then their mirror images (the right foot)."""
+    (:func:`latentoc.jump.robot.feet.foot_points`), then their mirror images (the right foot)."""
     geom = FootGeometry.from_result(traj)
     data = model.createData()
     out = []

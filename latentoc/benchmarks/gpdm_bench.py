@@ -66,7 +66,7 @@ def _child(case: str) -> dict:
 
     set_quiet(True)
     if case == "jump":
-        from latentoc.jump.training import training_jumps
+        from latentoc.jump.demonstration.training import training_jumps
 
         Y = training_jumps(0)[0].Y
     else:

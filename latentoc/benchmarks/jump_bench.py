@@ -69,7 +69,7 @@ def second_gpdm(cache: str) -> int:
 
 def cold_solve(tube: float) -> dict:
     from latentoc.jump.problem import problem_setup, settings_from_problem
-    from latentoc.jump.solve import solve_jump
+    from latentoc.jump.solve.solve import solve_jump
     from latentoc.latent.gp_layer import GPLayer
     from latentoc.problem.toml_files import load_problem
 
@@ -89,11 +89,11 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     start of phase 2's first NLP (every node row, samples on the packaged grids)."""
     import numpy as np
 
-    from latentoc.jump import exchange
-    from latentoc.jump.nlp import build_nlp, contact_sample_grid, flight_sample_grid, tube_times
+    from latentoc.jump.solve import exchange
+    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid, flight_sample_grid, tube_times
     from latentoc.jump.problem import problem_setup, settings_from_problem
-    from latentoc.jump.selection import Selection
-    from latentoc.jump.start import initial_point
+    from latentoc.jump.transcription.selection import Selection
+    from latentoc.jump.solve.initial_point import initial_point
     from latentoc.latent.gp_layer import GPLayer
     from latentoc.problem.toml_files import load_problem
 

@@ -11,7 +11,7 @@ the toe tip alone until takeoff.
 
 Printed per fit: the largest distance of a loaded point from its ground point on the 1 kHz grid,
 the largest residual, and the fitted motion's torques against Eq. 34's limits (contact forces by
-non-negative least squares on the loaded points, as :mod:`latentoc.jump.torque_limits` makes the
+non-negative least squares on the loaded points, as :mod:`latentoc.jump.robot.torque_limits` makes the
 limits): the largest excess, the joint it is at and the share of samples over a limit.
 
 Run: ``python -m latentoc bench planting [--res 0 8 16 32] [--base 12 24]``.
@@ -25,11 +25,11 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.base import base_to_freeflyer
-from latentoc.jump.cleaning import learned_leg
-from latentoc.jump.contact import POINTS, foot_points, joint_embedding
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
+from latentoc.jump.demonstration.planted import learned_leg
+from latentoc.jump.robot.feet import POINTS, foot_points, joint_embedding
 from latentoc.jump.problem import setup
-from latentoc.jump.torque_limits import contact_torques
+from latentoc.jump.robot.torque_limits import contact_torques
 from latentoc.robots.point_kinematics import point_jacobian
 from latentoc.latent.gp_layer import GPLayer
 from latentoc.latent.spline import BSpline
@@ -144,7 +144,7 @@ def plant_stance(js, n_base: int, n_res: int, iterations: int = 30, plant_weight
 def _torques(js, t: np.ndarray, Y_mu: list[np.ndarray], Pb: np.ndarray, Pr: np.ndarray, leg: np.ndarray,
              loaded: dict[str, np.ndarray]) -> dict:
     """Inverse dynamics of the fitted stance with NNLS point forces on the loaded points
-    (:func:`latentoc.jump.torque_limits.contact_torques`) against Eq. 34's limits."""
+    (:func:`latentoc.jump.robot.torque_limits.contact_torques`) against Eq. 34's limits."""
     model = js.model
     sb = BSpline(Pb.shape[0], js.phases.takeoff)
     Ym = [y.copy() for y in Y_mu]

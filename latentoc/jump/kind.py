@@ -1,12 +1,12 @@
 """The ``"broad-jump"`` problem kind (:class:`~latentoc.problem.kinds.Kind`): the humanoid's standing broad jump.
 
 Its schema, tube reference and solve are :mod:`.problem`'s; its NLP builder stays
-:func:`.nlp.build_nlp`.
+:func:`.transcription.nlp.build_nlp`.
 """
 from __future__ import annotations
 
 from latentoc.problem.kinds import Kind
-from latentoc.jump.path import METHODS
+from latentoc.jump.schedule.path import METHODS
 from latentoc.jump.problem import SCHEMA, solve_jump_problem, tube_reference
 
 __all__ = ["BROAD_JUMP"]

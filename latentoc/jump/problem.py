@@ -30,19 +30,19 @@ from latentoc.motions.problem_inputs import problem_dir
 from latentoc.problem.declaration import Problem, apply_overrides
 from latentoc.problem.schema import Check, Schema, Setting, Table, boolean, choice, integer, list_of, number, optional
 from latentoc.latent.tube import TUBE, relative_tube, tube_delta
-from latentoc.jump.base import base_to_freeflyer
-from latentoc.jump.closure import LegClosure
-from latentoc.jump.cleaning import PlantedTraining, learned_leg, plantable, planted_training
-from latentoc.jump.contact import POINTS, FootGeometry
-from latentoc.jump.path import METHODS, PATH_SMOOTHING, initial_latent_path, joint_range_path, latent_path, leg_residual_path
-from latentoc.jump.phases import SCHEDULE_ORDER, Phases, toe_path, training_phases
-from latentoc.jump.robot import JumpRobot
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
+from latentoc.jump.closure.planted_legs import LegClosure
+from latentoc.jump.demonstration.planted import PlantedTraining, learned_leg, plantable, planted_training
+from latentoc.jump.robot.feet import POINTS, FootGeometry
+from latentoc.jump.schedule.path import METHODS, PATH_SMOOTHING, initial_latent_path, joint_range_path, latent_path, leg_residual_path
+from latentoc.jump.schedule.phases import SCHEDULE_ORDER, Phases, toe_path, training_phases
+from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.rows import row_blocks
 from latentoc.jump.settings import FIELD_DOCS, JumpSettings
-from latentoc.jump.solve import JumpSolution, solve_jump
-from latentoc.jump.torque_limits import TorqueLimits, TrainingDynamics, estimate_training_dynamics, urdf_torque_limits
-from latentoc.jump.legged_robot import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
-from latentoc.jump.training import JumpTraining, antisymmetric_centre, motion_training, training_jumps
+from latentoc.jump.solve.solve import JumpSolution, solve_jump
+from latentoc.jump.robot.torque_limits import TorqueLimits, TrainingDynamics, estimate_training_dynamics, urdf_torque_limits
+from latentoc.jump.robot.declaration import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
+from latentoc.jump.demonstration.training import JumpTraining, antisymmetric_centre, motion_training, training_jumps
 
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
            "settings_from_problem", "SCHEMA", "OPTIONS", "RANGES", "SETUP_OPTIONS", "tube_reference"]
@@ -69,7 +69,7 @@ class JumpSetup:
 
     @cached_property
     def closure(self) -> LegClosure:
-        """The planted foot of the training's standing pose (:mod:`.closure`)."""
+        """The planted foot of the training's standing pose (:mod:`.closure.planted_legs`)."""
         return LegClosure.of(self.sym, self.smap, self.geom, self.training.Q[0])
 
     def robot(self, mu: float) -> JumpRobot:
@@ -96,9 +96,9 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 27, tor
           schedule: dict[str, float] | None = None) -> JumpSetup:
     """Model, GPDM, phases, feet, torque limits and training start. ``stride``: the GPDM learns
     every ``stride``-th captured frame (120 Hz) of each jump; ``plant``: the jumps' feet planted
-    first (:mod:`.cleaning`; of "all", the jumps whose contact schedule is whole); ``robot``: the
-    problem's ``[robot]`` (:mod:`.legged_robot`), its motion relative to ``base_dir``; ``schedule``:
-    contact times that replace the detected ones (:func:`.phases.training_phases`)."""
+    first (:mod:`.demonstration.planted`; of "all", the jumps whose contact schedule is whole); ``robot``: the
+    problem's ``[robot]`` (:mod:`.robot.declaration`), its motion relative to ``base_dir``; ``schedule``:
+    contact times that replace the detected ones (:func:`.schedule.phases.training_phases`)."""
     model, smap = robot_model(robot)
     if robot.motion:
         if training == "all":
@@ -330,7 +330,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     the Solution of this problem at a smaller tube (the sweep's previous one); with ``sweep_starts =
     "warm+cold"`` the tube is also solved from the training fit and the better jump kept.
     ``overrides`` (tube, control_points, ...) change the problem's settings first."""
-    from latentoc.jump.verify import verify
+    from latentoc.jump.check.verify import verify
 
     problem = apply_overrides(problem, overrides)
     k = _joint_range(problem, method, joint_range_deg)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from latentoc.jump.contact import MU
+from latentoc.jump.robot.feet import MU
 
 
 @dataclass
@@ -20,7 +20,7 @@ class JumpSettings:
     flight_substeps: int = 2  # trapezoid steps of the pitch rate per flight node interval
     tube_spacing: float = 0.005  # s between tube points
     sample_spacing: float = 0.005  # s between the contact and flight samples of phase 2 (0: none)
-    exchange: bool = True  # sampled rows grow where the 1 kHz grid is violated (:mod:`.exchange`)
+    exchange: bool = True  # sampled rows grow where the 1 kHz grid is violated (:mod:`.solve.exchange`)
     exchange_rounds: int = 8
     torque_limits: bool = True  # Eq. 34
     polygon: bool = True  # Eq. 35-36 in the landing

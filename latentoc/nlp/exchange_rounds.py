@@ -4,7 +4,7 @@ A solve checks every hard constraint on the 1 kHz grid of its exported motion, a
 worst time of each stretch that breaks (or comes near) one, and resumes warm, until the grid holds
 (the Remez-style exchange of semi-infinite programming). The loop and the choice of times are
 here, one for every kind; what is checked, added and carried is the kind's
-(:mod:`latentoc.min_torque.exchange`, :mod:`latentoc.jump.exchange`).
+(:mod:`latentoc.min_torque.exchange`, :mod:`latentoc.jump.solve.exchange`).
 """
 from __future__ import annotations
 

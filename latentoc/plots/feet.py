@@ -7,7 +7,7 @@ of its foot; otherwise the frames are each foot's foot, ball and toes bodies (th
 ``lfoot``, ``lfoot_end``, ``ltoes_end``) and a point lies in one of them by its name
 (:data:`BODY_OF`). A left point ``name`` sits at ``{name}_offset`` in its frame (zeros where the
 trajectory has none, e.g. ``toe_offset`` of older results). The right foot is the left one's mirror
-image (y negated), as in :mod:`latentoc.jump.contact`: its forces are the left ones mirrored, and
+image (y negated), as in :mod:`latentoc.jump.robot.feet`: its forces are the left ones mirrored, and
 each of its points is the point of its right frame that is the mirror image of the left point at
 the model's neutral configuration (a left-right symmetric pose; :func:`mirrored_offset`). The
 offset itself is not simply mirrored: the CMU humanoid's right frames are the left ones mirrored

@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 from scipy.spatial import ConvexHull, QhullError
 
 from latentoc.intervals import runs
-from latentoc.support_polygon import margin, support_polygon
+from latentoc.jump.robot.support_polygon import margin, support_polygon
 from latentoc.plots.feet import ContactPoints, contact_points_of
 from latentoc.plots.figure import LIMIT_STYLE, new_figure, panel_axes
 
@@ -39,7 +39,7 @@ def polygon_margin(polygon: np.ndarray, p: np.ndarray) -> float:
 
 def _polygon_points(points: ContactPoints) -> list[int]:
     """Indices (among both feet's 2 k points) of the support polygon's corners: each foot's heel
-    and toe point as the solver's polygon (:func:`latentoc.support_polygon.feet_polygon`), else all."""
+    and toe point as the solver's polygon (:func:`latentoc.jump.robot.support_polygon.feet_polygon`), else all."""
     heel, toe = points.index("heel"), points.index("toe")
     ends = [heel, toe] if heel is not None and toe is not None else list(range(points.k))
     return [side * points.k + j for side in range(2) for j in ends]

@@ -1,9 +1,9 @@
 """A contact node or sample of the stance or the landing (Eq. 3, 34-36).
 
 Inputs r: the planted body's shift along x from its standing pose (0 in the stance, the jump in
-the landing), whether the heel body's hinge is held (:mod:`..closure`), and the friction-pyramid
+the landing), whether the heel body's hinge is held (:mod:`..closure.planted_legs`), and the friction-pyramid
 edge weights lam (heel, ball, toe, pad; body weights). The legs are closed and the base follows from
-the planted body (:meth:`~..robot.JumpRobot.planted`), so the loaded points stay on the ground by
+the planted body (:meth:`~..robot.jump_robot.JumpRobot.planted`), so the loaded points stay on the ground by
 construction. Rows: the sagittal base rows of RNEA minus sum J^T f (body weights), the joint
 torques, the points' heights (an unloaded one above the ground), the centre of pressure on the
 ground within the loaded support, the ZMP in the support polygon (both homogeneous in the normal
@@ -15,11 +15,11 @@ import casadi as ca
 import numpy as np
 
 from latentoc.nlp.blocks import RobotBlock
-from latentoc.jump.contact import EDGES, POINTS, point_forces, point_generalized_force, toe_wrench
-from latentoc.jump.robot import SAGITTAL_ROWS, JumpRobot, galilean
-from latentoc.jump.selection import POLYGON_EDGES
-from latentoc.jump.wiring import Rows, Wiring
-from latentoc.support_polygon import symbolic_rows
+from latentoc.jump.robot.feet import EDGES, POINTS, point_forces, point_generalized_force, toe_wrench
+from latentoc.jump.robot.jump_robot import SAGITTAL_ROWS, JumpRobot, galilean
+from latentoc.jump.transcription.selection import POLYGON_EDGES
+from latentoc.jump.transcription.wiring import Rows, Wiring
+from latentoc.jump.robot.support_polygon import symbolic_rows
 from latentoc.jump.rows import inputs
 
 INPUTS = {"shift": 1, "held": 1, "lam": EDGES}
@@ -90,7 +90,7 @@ def _rows_at(rows: Rows, w: Wiring, k: int, t: float, torque: np.ndarray, polygo
 
 
 def _clearance_at(rows: Rows, w: Wiring, k: int, t: float) -> None:
-    """The unloaded points' heights (above the ground: :func:`latentoc.jump.nlp.build_nlp`'s bounds)."""
+    """The unloaded points' heights (above the ground: :func:`latentoc.jump.transcription.nlp.build_nlp`'s bounds)."""
     at = np.array([t])
     unloaded = [i for i, p in enumerate(POINTS) if not w.phases.loaded(p, at)[0]]
     if unloaded:

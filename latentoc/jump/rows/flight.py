@@ -1,4 +1,4 @@
-"""The flight's rows (:mod:`latentoc.jump.flight`): inverse dynamics, foot clearance, pitch rate.
+"""The flight's rows (:mod:`latentoc.jump.closure.ballistic`): inverse dynamics, foot clearance, pitch rate.
 
 In flight the body falls freely, so the joint torques do not depend on where the body is nor on
 its pitch: they are those of RNEA with the base at the origin, unpitched, turning at the pitch
@@ -6,7 +6,7 @@ rate pd, and accelerating at (ax, az, pdd) such that the base rows of RNEA vanis
 wrench; Crocoddyl's inverse-dynamics form). (pd, ax, az, pdd) are variables of each flight
 sample, tied to the conserved momentum by the pitch-rate block, so the torque block's
 derivatives hold no ballistic base; it can sit at any time of the flight (the exchange of
-:mod:`latentoc.jump.exchange` places it on the 1 kHz grid). The clearance block takes the
+:mod:`latentoc.jump.solve.exchange` places it on the 1 kHz grid). The clearance block takes the
 pitch and the takeoff COM state to place the feet.
 """
 from __future__ import annotations
@@ -18,9 +18,9 @@ import scipy.sparse as sp
 from latentoc.nlp.assemble import Family
 from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.evaluators import BlockEvaluator
-from latentoc.jump.flight import GRAVITY, cumulative_trapezoid_matrix, flight_functions
-from latentoc.jump.robot import SAGITTAL_ROWS, JumpRobot
-from latentoc.jump.wiring import Rows, Wiring
+from latentoc.jump.closure.ballistic import GRAVITY, cumulative_trapezoid_matrix, flight_functions
+from latentoc.jump.robot.jump_robot import SAGITTAL_ROWS, JumpRobot
+from latentoc.jump.transcription.wiring import Rows, Wiring
 from latentoc.jump.rows import inputs
 
 DYNAMICS_INPUTS = {"pd": 1, "acc": 3}  # pitch rate; base accelerations (x, z, pitch)

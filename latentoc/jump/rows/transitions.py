@@ -2,7 +2,7 @@
 
 Takeoff inputs r: whether the hinge is held and the flight variables (c_to, cd_to, L, p); rows: the
 flight variables equal the stance's COM, COM velocity, angular momentum and pitch, and the closed
-legs (:mod:`..closure`) meet the GP mean's: the out-of-plane joints (and a held hinge) with their
+legs (:mod:`..closure.planted_legs`) meet the GP mean's: the out-of-plane joints (and a held hinge) with their
 velocities, so the flight starts where the stance ends.
 
 Touchdown inputs r: whether the hinge is held, the planted body's shift, the flight's pitch p and
@@ -19,9 +19,9 @@ import casadi as ca
 import numpy as np
 
 from latentoc.nlp.blocks import RobotBlock
-from latentoc.jump.flight import flight_functions
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.wiring import Rows, Wiring
+from latentoc.jump.closure.ballistic import flight_functions
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.transcription.wiring import Rows, Wiring
 from latentoc.jump.rows import inputs
 from latentoc.jump.rows.flight import ballistic_com, flight_base
 

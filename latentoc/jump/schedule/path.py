@@ -5,14 +5,14 @@
 * ``"joint-range"``: the full configuration-space baseline of Sect. 4.1.1 on the humanoid. The
   spline is the joint path (y = x, :class:`~latentoc.latent.gp_layer.IdentityLayer`) with as many
   control points and the same knots as the latent spline, starting from the least-squares fit of
-  the training jump's 37 learned joints (:func:`.problem.setup`);
+  the training jump's 37 learned joints (:func:`..problem.setup`);
   each free control point stays within +-k degrees of that fit (Table 2's "joint range"), and the
   centre joints that flip sign under the mirror stay zero (a symmetric motion has none). No tube.
 
 With ``[options] leg_residual`` (deg) the latent path carries a residual beside it: the path is
 (x, r), the left leg's sagittal joints are the GP mean's plus r (:class:`~latentoc.latent.residual_layer.ResidualLayer`),
 each free control point of r within +-leg_residual of zero, the tube on x alone. With the planted
-foot by construction (:mod:`.closure`) the base follows the legs, and this residual is what lets them
+foot by construction (:mod:`..closure.planted_legs`) the base follows the legs, and this residual is what lets them
 carry a physical push-off (docs/broad-jump.md, issue 45).
 
 Every other row of the jump (contact, flight, ZMP, COM, torque limits, friction) is the same NLP.

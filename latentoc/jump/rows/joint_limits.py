@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from latentoc.nlp.blocks import RobotBlock
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.wiring import Rows, Wiring
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.transcription.wiring import Rows, Wiring
 from latentoc.jump.rows import inputs
 
 LIMIT_BACKOFF = 5e-3  # rad and rad/s inside the limits: the rows hold between their samples too (5 ms apart)

@@ -6,7 +6,7 @@ margin of binding or was violated. Between the nodes, a **contact sample** is a 
 friction-pyramid edge weights (the wrench split is part of the solution there), its base rows and
 the torque and polygon rows chosen for it; a **flight sample** a time with its own pitch rate and
 base accelerations, the free-fall rows and chosen torque rows; the **tube** a set of times where
-sigma^2 <= delta (Eq. 29). :mod:`.exchange` decides what is chosen; :mod:`.nlp` builds it.
+sigma^2 <= delta (Eq. 29). :mod:`..solve.exchange` decides what is chosen; :mod:`.nlp` builds it.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import numpy as np
 __all__ = ["Selection", "POLYGON_EDGES", "FLIGHT_SAMPLE"]
 
 POLYGON_EDGES = 4  # support polygon edges: each of the ZMP's and the COM's rows (zmp_polygon, com_polygon)
-FLIGHT_SAMPLE = ("pd", "ax", "az", "pdd")  # a flight sample's variables (:mod:`.rows.flight`)
+FLIGHT_SAMPLE = ("pd", "ax", "az", "pdd")  # a flight sample's variables (:mod:`..rows.flight`)
 
 
 def _key(t: np.ndarray) -> np.ndarray:
@@ -27,7 +27,7 @@ def _key(t: np.ndarray) -> np.ndarray:
 @dataclass
 class Selection:
     """The chosen rows (module doc). Masks are bool; torque masks are over the joints whose torque
-    rows the NLP keeps (:attr:`latentoc.jump.robot.JumpRobot.unmirrored`), polygon masks over the
+    rows the NLP keeps (:attr:`latentoc.jump.robot.jump_robot.JumpRobot.unmirrored`), polygon masks over the
     ZMP's edges then the COM's (2 x :data:`POLYGON_EDGES`)."""
 
     node_torque: np.ndarray  # (contact nodes, joints)

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from latentoc.jump.contact import EDGES
+from latentoc.jump.robot.feet import EDGES
 
 __all__ = ["JumpVariables"]
 

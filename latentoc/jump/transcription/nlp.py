@@ -1,11 +1,11 @@
 """The broad-jump NLP (Sect. 4.2, Eq. 33-36): row families on nodes and samples, bounds, objective.
 
 Joint motion: y = mu_Q(x(t)) along the latent spline (Eq. 18, 26-28, the GP layer; a double knot
-at each contact event, :meth:`.phases.Phases.latent_spline`), or, for the full configuration-space
-baseline, the joint spline itself (the identity layer, :mod:`.path`). In the stance and the landing
-the legs are closed and the base follows from the planted body (:mod:`.closure`), which holds its
+at each contact event, :meth:`..schedule.phases.Phases.latent_spline`), or, for the full configuration-space
+baseline, the joint spline itself (the identity layer, :mod:`..schedule.path`). In the stance and the landing
+the legs are closed and the base follows from the planted body (:mod:`..closure.planted_legs`), which holds its
 ground pose exactly; in flight the base falls freely. Hard constraints, each a row family
-(:mod:`.rows`), where :class:`~.selection.Selection` puts them:
+(:mod:`..rows`), where :class:`~.selection.Selection` puts them:
 
 * contact nodes (stance and landing, every 10 ms): base rows = sum J^T f, the training contact
   schedule (an unloaded point above the ground, carrying no force), and the chosen torque limits
@@ -32,15 +32,15 @@ from latentoc.latent.gp_layer import Layer
 from latentoc.nlp.assemble import SparseNLP
 from latentoc.nlp.blocks import RobotBlock
 from latentoc.latent.spline import BSpline
-from latentoc.jump.contact import EDGES, POINTS
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.rows import families, limits
+from latentoc.jump.robot.feet import EDGES, POINTS
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.rows import families, joint_limits
 from latentoc.jump.rows.flight import pitch_grid
-from latentoc.jump.selection import Selection
+from latentoc.jump.transcription.selection import Selection
 from latentoc.jump.settings import JumpSettings
-from latentoc.jump.variables import JumpVariables
-from latentoc.jump.wiring import Wiring
+from latentoc.jump.transcription.variables import JumpVariables
+from latentoc.jump.transcription.wiring import Wiring
 
 __all__ = ["JumpNLP", "build_nlp", "node_grid", "tube_times", "contact_sample_grid", "flight_sample_grid", "OBJECTIVES", "FORCE_REGULARISATION"]
 
@@ -57,7 +57,7 @@ class JumpNLP:
 
     Each constraint row has a name (its block output, e.g. ``torque``), a time and a component
     (the joint among the kept ones, the polygon edge, or the output's index): together the row's
-    identity across NLPs with other selections (:func:`latentoc.jump.warm.carried`)."""
+    identity across NLPs with other selections (:func:`latentoc.jump.solve.warm.carried`)."""
 
     nlp: SparseNLP
     variables: JumpVariables
@@ -197,7 +197,7 @@ def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: 
     act, scale = robot.active, robot.torque_scale
     lbg[torque] = (robot.limits.tau_min[act][comps[torque]] + TORQUE_BACKOFF) / scale[comps[torque]]
     ubg[torque] = (robot.limits.tau_max[act][comps[torque]] - TORQUE_BACKOFF) / scale[comps[torque]]
-    limits.bounds(robot, names, comps, lbg, ubg)
+    joint_limits.bounds(robot, names, comps, lbg, ubg)
     return lbg, ubg
 
 

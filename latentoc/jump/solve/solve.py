@@ -20,17 +20,17 @@ from latentoc.latent.gp_layer import Layer
 from latentoc.nlp import ipopt
 from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.exchange_rounds import Exchange, exchange_rounds
-from latentoc.jump import exchange
-from latentoc.jump.export import trajectory
-from latentoc.jump.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.selection import Selection
+from latentoc.jump.solve import exchange
+from latentoc.jump.check.export import trajectory
+from latentoc.jump.transcription.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.transcription.selection import Selection
 from latentoc.jump.settings import JumpSettings
-from latentoc.jump.consistent_start import consistent_path
-from latentoc.jump.start import initial_point
-from latentoc.jump.verify import series
-from latentoc.jump.warm import carried_multipliers, carried_point
+from latentoc.jump.solve.consistent_path import consistent_path
+from latentoc.jump.solve.initial_point import initial_point
+from latentoc.jump.check.verify import series
+from latentoc.jump.solve.warm import carried_multipliers, carried_point
 
 __all__ = ["JumpSolution", "solve_jump", "ipopt_options"]
 
@@ -93,7 +93,7 @@ class _Solve:
         self.tube = tube_times(settings, phases, layer)
         self.t0 = time.perf_counter()
         self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
-        self.consistent: dict = {}  # the consistent start's residuals (:mod:`.consistent_start`)
+        self.consistent: dict = {}  # the consistent start's residuals (:mod:`.consistent_path`)
 
     def lap(self, part: str) -> None:
         self.t0 = self.clock.add(part, self.t0)
@@ -188,7 +188,7 @@ class _Solve:
 def solve_jump(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], phases: Phases,
                settings: JumpSettings, start: dict, model: pin.Model, warm: dict | None = None,
                verbose: bool = False) -> JumpSolution:
-    """Solve the jump (module doc) along the path of ``layer`` (:mod:`.path`). ``start`` holds the
+    """Solve the jump (module doc) along the path of ``layer`` (:mod:`..schedule.path`). ``start`` holds the
     training start (P, t, base, x_L) and, for a joint path, the control points' ``P_range``;
     ``model`` is the numeric model the 1 kHz checks use; ``warm`` is a neighbouring solve's
     :meth:`JumpSolution.warm_start`."""

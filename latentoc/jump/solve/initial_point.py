@@ -1,8 +1,8 @@
 """The jump's initial point: the training motion in the NLP's variables.
 
 The path is the setup's smoothed fit of the learned latent points (or of the training joints,
-:mod:`.path`); the flight's takeoff state and pitch follow from the stance's closed legs and planted
-base at takeoff (ballistic, :mod:`.flight`, :mod:`.closure`); the contact forces are the
+:mod:`..schedule.path`); the flight's takeoff state and pitch follow from the stance's closed legs and planted
+base at takeoff (ballistic, :mod:`..closure.ballistic`, :mod:`..closure.planted_legs`); the contact forces are the
 non-negative edge weights of the loaded points that best balance each node's base rows. The
 samples' variables (:func:`sample_values`) follow from the rest of a point, so a point can be
 carried into an NLP with more samples.
@@ -14,11 +14,11 @@ from scipy.optimize import nnls
 
 from latentoc.latent.gp_layer import Layer
 from latentoc.latent.spline import BSpline
-from latentoc.jump.contact import EDGES
-from latentoc.jump.flight import ballistic_base, flight_functions
-from latentoc.jump.nlp import JumpNLP
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
+from latentoc.jump.robot.feet import EDGES
+from latentoc.jump.closure.ballistic import ballistic_base, flight_functions
+from latentoc.jump.transcription.nlp import JumpNLP
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
 
 __all__ = ["initial_point", "sample_values", "balanced_forces", "takeoff_state"]
 

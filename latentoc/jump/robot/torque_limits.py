@@ -6,7 +6,7 @@ contact forces are estimated by non-negative least squares: the heel, ball and t
 feet each push with ``lam1 (mu, 1) + lam2 (-mu, 1)``, ``lam >= 0`` (so the fitted forces are
 unilateral, inside the friction cone mu = 0.4 and the centre of pressure is inside the foot)
 and the base rows of RNEA are matched, ``rnea_base = sum J^T f``; with ``loaded`` only the
-points the contact schedule loads push (:mod:`.phases`), as in the NLP.  In flight f = 0.  The
+points the contact schedule loads push (:mod:`..schedule.phases`), as in the NLP.  In flight f = 0.  The
 joint torques are ``tau = rnea_joint - (J^T f)_joint``; the limits are their per-joint
 minimum and maximum over the motion, widened by ``margin`` times the joint's peak |tau|, at
 least ``floor`` N m: the head and neck carry 2-10 N m, and 10 % of that bound the whole jump
@@ -22,9 +22,9 @@ from scipy.optimize import nnls
 
 from latentoc.errors import ProblemError
 from latentoc.latent.spline import BSpline
-from latentoc.jump.base import base_to_freeflyer
-from latentoc.jump.contact import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
-from latentoc.jump.training import JumpTraining
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
+from latentoc.jump.robot.feet import MU, POINTS, FootGeometry, generator_columns, generator_matrix, joint_embedding, point_jacobians
+from latentoc.jump.demonstration.training import JumpTraining
 
 
 @dataclass

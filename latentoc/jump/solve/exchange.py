@@ -2,7 +2,7 @@
 
 A solve starts with the rows that are within a margin of binding at its start point (the seed)
 and, after each converged solve, re-checks every hard constraint on the exported 1 kHz motion
-with numeric Pinocchio (:mod:`.export`, :func:`.verify.series`): torque limits, the needed
+with numeric Pinocchio (:mod:`..check.export`, :func:`..check.verify.series`): torque limits, the needed
 wrench's cone and centre of pressure, the exported point forces' cones and their balance of the
 base rows, the ZMP and the COM in the support polygon, the tube and the unloaded points' clearance
 of the ground (:func:`clearance`; the loaded ones hold theirs by construction). Every violated or nearly violated stretch adds a sample at its
@@ -20,11 +20,11 @@ import numpy as np
 
 from latentoc.nlp.evaluators import BlockEvaluator
 from latentoc.nlp.exchange_rounds import TUBE_TOL, worst_times
-from latentoc.jump.contact import POINTS
-from latentoc.jump.nlp import JumpNLP
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.selection import POLYGON_EDGES, Selection
+from latentoc.jump.robot.feet import POINTS
+from latentoc.jump.transcription.nlp import JumpNLP
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.transcription.selection import POLYGON_EDGES, Selection
 from latentoc.jump.settings import JumpSettings
 
 __all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING"]
@@ -69,7 +69,7 @@ def _rel_torque(sr: dict[str, np.ndarray], robot: JumpRobot) -> np.ndarray:
 def clearance(sr: dict[str, np.ndarray], traj: dict, robot: JumpRobot, phases: Phases) -> np.ndarray:
     """The unloaded points' heights above their standing ones in the contact phases on the 1 kHz grid
     (n x 4, m, NaN where a point is loaded or in flight), the numeric twin of
-    :func:`.rows.contact._clearance_at`."""
+    :func:`..rows.contact._clearance_at`."""
     t, P = np.asarray(traj["t"]), sr["points"]  # (n, 4, 3): heel, ball, toe, pad
     contact = np.asarray(traj["contact"]).astype(bool)
     assert robot.geom.footprint is not None

@@ -18,8 +18,8 @@ foot, used instead of ``wrench`` for the generalized force; ``contact`` flag,
   (n, 4: whether the heel, ball, toe and pad may carry force, the contact schedule) also
   ``cop_margin_loaded``, against the rearmost loaded point (the heel, else the ball, else a
   ``toe_pad`` behind the toe tip);
-* ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`.zmp`) and the
-  projected COM against the support polygon (:mod:`latentoc.support_polygon`) during landing
+* ZMP from ``pinocchio.computeCentroidalMomentumTimeVariation`` (:mod:`..robot.zmp`) and the
+  projected COM against the support polygon (:mod:`latentoc.jump.robot.support_polygon`) during landing
   (COM once settled);
 * joint torques ``rnea[6:] - (J^T w)[6:]`` against tau_min, tau_max (joints with a
   non-zero range; the others must vanish by symmetry);
@@ -44,12 +44,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.contact import MIRROR, POINTS, FootGeometry, foot_points, point_jacobians
+from latentoc.jump.robot.feet import MIRROR, POINTS, FootGeometry, foot_points, point_jacobians
 from latentoc.intervals import runs
 from latentoc.min_torque.limits import Limits
 from latentoc.robots.point_kinematics import point_jacobian
-from latentoc.support_polygon import feet_polygon
-from latentoc.jump.zmp import G, zmp
+from latentoc.jump.robot.support_polygon import feet_polygon
+from latentoc.jump.robot.zmp import G, zmp
 
 PAD_SETBACK = 0.01  # m: the pad's setback in results that do not record it (the CMU humanoid's)
 LOADED = 0.01  # of body weight: a point pushing harder than this is loaded
@@ -81,7 +81,7 @@ def series(model: pin.Model, arrays: dict, mu: float = 0.4) -> dict[str, np.ndar
     sums up (module doc): ``torque`` (n, joints with a range; N m to the nearer limit), ``normal``
     (needed fz, N), ``friction`` (mu fz - |fx|, N), ``cop`` (m inside the loaded support),
     ``point_cone`` (N, over the exported point forces), ``zmp`` and ``com`` (n, 4: m inside each
-    edge of the support polygon, :func:`latentoc.support_polygon.feet_polygon`), each NaN where it does
+    edge of the support polygon, :func:`latentoc.jump.robot.support_polygon.feet_polygon`), each NaN where it does
     not apply (flight; ZMP before touchdown, COM before settling)."""
     t, Q, V, A = (np.asarray(arrays[k]) for k in ("t", "q", "v", "a"))
     Wr, contact = np.asarray(arrays["wrench"]), np.asarray(arrays["contact"]).astype(bool)

@@ -2,7 +2,7 @@
 
 The contact kind knows a robot only through this declaration: its model, the left/right mirror of
 its joints and frames, the left foot's four contact points (the rows' heel, ball, toe tip and
-pad, :data:`.contact.POINTS`; the right foot is the mirror image) and where its torque limits come
+pad, :data:`.feet.POINTS`; the right foot is the mirror image) and where its torque limits come
 from. The CMU humanoid is one such declaration (:data:`CMU_HUMANOID`, the defaults)::
 
     [robot]
@@ -34,7 +34,7 @@ from latentoc.errors import ProblemError
 from latentoc.mocap.symmetry import MirrorError, SymmetryMap
 from latentoc.robots.catalog import load_robot, robot_names
 from latentoc.problem.schema import Check, choice
-from latentoc.jump.contact import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
+from latentoc.jump.robot.feet import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
 
 __all__ = ["PointDeclaration", "RobotDeclaration", "CMU_HUMANOID", "ROBOT_KEYS", "declaration", "robot_model"]
 
@@ -178,7 +178,7 @@ def _model_name(value: Any) -> str:
     return value
 
 
-#: the ``[robot]`` keys: (check, default (the CMU humanoid's), doc), the schema's settings (:mod:`.problem`)
+#: the ``[robot]`` keys: (check, default (the CMU humanoid's), doc), the schema's settings (:mod:`..problem`)
 ROBOT_KEYS: dict[str, tuple[Check, Any, str]] = {
     "model": (Check(_model_name, "a robot name from `latentoc list --robots` with a floating base"),
               CMU_HUMANOID.model, "the robot: cmu-humanoid (the symmetrised CMU skeleton) or a catalogue name"),
@@ -210,7 +210,7 @@ def robot_model(decl: RobotDeclaration) -> tuple[pin.Model, SymmetryMap]:
     """The model and its joints' mirror: the CMU humanoid's from its skeleton, a URDF robot's from
     its joint names (:meth:`SymmetryMap.from_joint_names`)."""
     if decl.model == "cmu-humanoid":
-        from latentoc.jump.training import jump_model
+        from latentoc.jump.demonstration.training import jump_model
 
         return jump_model()
     model = load_robot(decl.model)

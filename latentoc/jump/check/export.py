@@ -2,11 +2,11 @@
 
 Joint motion from the GP layer along the optimal latent path (or the joint path itself, the
 identity layer: then no latent path and no sigma^2), in the contact phases with the legs closed
-and the base from the planted body (:mod:`.closure`) and, in flight, ballistic from the takeoff
+and the base from the planted body (:mod:`..closure.planted_legs`) and, in flight, ballistic from the takeoff
 state with the pitch rate integrated on the 1 kHz grid. The point forces are the NLP's edge weights at its contact nodes
 and samples (the wrench split is part of the solution there); between them, the edge weights
 interpolated and corrected to the non-negative weights nearest them that balance the sagittal base
-rows (:func:`corrected_edge_weights`). The exchange (:mod:`.exchange`) adds a contact sample wherever
+rows (:func:`corrected_edge_weights`). The exchange (:mod:`..solve.exchange`) adds a contact sample wherever
 this split does not hold the cones or the torque limits.
 """
 from __future__ import annotations
@@ -17,13 +17,13 @@ from scipy.optimize import nnls
 
 from latentoc.latent.gp_layer import Layer
 from latentoc.latent.residual_layer import ResidualLayer
-from latentoc.jump.base import base_to_freeflyer
-from latentoc.jump.contact import EDGES, POINTS, FootGeometry, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
-from latentoc.jump.flight import ballistic_base, flight_functions
-from latentoc.jump.nlp import JumpNLP
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.start import takeoff_state
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer
+from latentoc.jump.robot.feet import EDGES, POINTS, FootGeometry, foot_points, generator_columns, point_forces, point_jacobians, toe_wrench
+from latentoc.jump.closure.ballistic import ballistic_base, flight_functions
+from latentoc.jump.transcription.nlp import JumpNLP
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.solve.initial_point import takeoff_state
 
 __all__ = ["trajectory", "contact_geometry", "corrected_edge_weights"]
 

@@ -2,7 +2,7 @@
 
 The exchange (:mod:`.exchange`) and a sweep's warm start resume from a solution of an NLP whose
 selection is a subset of the new one's. Variables are matched by block and, for the samples, by
-time (a new sample's variables follow from the rest of the point, :func:`.start.sample_values`);
+time (a new sample's variables follow from the rest of the point, :func:`.initial_point.sample_values`);
 rows by their family, name, time and component. New variables and rows start with zero
 multipliers.
 """
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from latentoc.jump.nlp import JumpNLP
-from latentoc.jump.start import sample_values
+from latentoc.jump.transcription.nlp import JumpNLP
+from latentoc.jump.solve.initial_point import sample_values
 
 __all__ = ["carried_point", "carried_multipliers", "row_keys"]
 

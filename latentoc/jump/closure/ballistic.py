@@ -20,8 +20,8 @@ import casadi as ca
 import numpy as np
 
 from latentoc.dynamics import SymbolicModel
-from latentoc.jump.base import _ry
-from latentoc.jump.contact import joint_embedding
+from latentoc.jump.robot.sagittal_base import _ry
+from latentoc.jump.robot.feet import joint_embedding
 
 GRAVITY = np.array([0.0, -9.81])  # (x, z)
 

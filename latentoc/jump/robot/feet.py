@@ -1,6 +1,6 @@
 """Foot contact: points and contact forces (Sect. 4.2).
 
-Each foot has four contact points, declared per robot (:mod:`.legged_robot`; the right foot is the
+Each foot has four contact points, declared per robot (:mod:`.declaration`; the right foot is the
 left's mirror image); their roles in the rows:
 
 * ``heel`` - the rearmost point (the CMU humanoid's: its ankle dropped to the ground standing);
@@ -11,14 +11,14 @@ left's mirror image); their roles in the rows:
   the toe tip alone every base row of such a sample would ask the motion for none).
 
 In contact (stance and landing) the toe tip's body is planted at its ground pose by construction
-(:mod:`.closure`): the toe tip and the pad do not move, and the heel and ball only with the toe joint
+(:mod:`..closure.planted_legs`): the toe tip and the pad do not move, and the heel and ball only with the toe joint
 once the heel is off the ground.
 
 Contact forces: four points per foot, each with a 2-D friction pyramid written with its two edge
 generators ``lam1 (mu, 1) + lam2 (-mu, 1)``, ``lam >= 0``.  In the sagittal plane this pyramid *is*
 the exact cone ``|fx| <= mu fz``; lateral forces are zero by symmetry.  Unilateral forces and the
 centre of pressure inside the foot follow from ``lam >= 0``.  The heel and ball can push only when
-they are on the ground, by the training motion's contact schedule (:mod:`.phases`).
+they are on the ground, by the training motion's contact schedule (:mod:`..schedule.phases`).
 """
 from __future__ import annotations
 
@@ -62,7 +62,7 @@ class ContactPoint:
 class FootGeometry:
     """The left foot's points in :data:`POINTS`' order, each fixed in a frame, and each of those
     frames' mirror partner on the right (built from a problem's ``[robot]``,
-    :meth:`.legged_robot.RobotDeclaration.geometry`)."""
+    :meth:`.declaration.RobotDeclaration.geometry`)."""
 
     points: tuple[ContactPoint, ...]
     right: dict[str, str]  # left frame -> its mirror partner
@@ -77,7 +77,7 @@ class FootGeometry:
     @property
     def pad_setback(self) -> float:
         """How far the pad stands behind the toe tip (m, to the nanometre): the rear edge of the centre
-        of pressure while the toes carry the foot alone (:mod:`.rows.contact`)."""
+        of pressure while the toes carry the foot alone (:mod:`..rows.contact`)."""
         assert self.footprint is not None, "the pad's setback is measured on the standing footprint"
         return round(float(self.footprint[0, 2] - self.footprint[0, 3]), 9)
 
@@ -90,7 +90,7 @@ class FootGeometry:
     def planted_shift(self, landed: np.ndarray, x_L: float) -> np.ndarray:
         """How far the planted body stands along x from its standing place at contact times whose
         ``landed`` flags are given: 0 in the stance, ``x_L`` less :attr:`toe_x` in the landing (the
-        rows wire the same, :func:`.rows.contact._planted_inputs`)."""
+        rows wire the same, :func:`..rows.contact._planted_inputs`)."""
         return np.where(landed, x_L - self.toe_x, 0.0)
 
     @property

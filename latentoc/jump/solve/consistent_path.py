@@ -1,6 +1,6 @@
 """A start the planted foot can follow: the latent path moved least so that its contacts are physical.
 
-With the base taken from the planted body (:mod:`.closure`), every error of the GP mean's legs
+With the base taken from the planted body (:mod:`..closure.planted_legs`), every error of the GP mean's legs
 becomes a base motion: along the plain fit of the learned latent points the CMU's closed base
 accelerates at several hundred m/s^2 in the last 30 ms before takeoff, while the planted
 demonstration's own base accelerates at some tens. Before phase 1, the free control points and the
@@ -17,9 +17,9 @@ from scipy.optimize import least_squares
 
 from latentoc.latent.gp_layer import Layer
 from latentoc.latent.spline import BSpline
-from latentoc.jump.flight import ballistic_base, flight_functions
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
+from latentoc.jump.closure.ballistic import ballistic_base, flight_functions
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
 
 __all__ = ["consistent_path"]
 

@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from latentoc.nlp.assemble import Family
 
 from latentoc.nlp.evaluators import VarianceEvaluator
-from latentoc.jump.wiring import Wiring
+from latentoc.jump.transcription.wiring import Wiring
 
 
 def wire(w: Wiring) -> None:

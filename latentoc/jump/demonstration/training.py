@@ -9,7 +9,7 @@
   are set to zero in the training data: a symmetric motion cannot have them, and keeping
   them would put the model's lateral base rows out of balance.
 * The base of the training motion is projected to the sagittal plane
-  (:mod:`.base`), and the motion is shifted so that the ground is ``z = 0`` and the
+  (:mod:`..robot.sagittal_base`), and the motion is shifted so that the ground is ``z = 0`` and the
   toe tip at the start is at ``x = 0``.
 """
 from __future__ import annotations
@@ -26,8 +26,8 @@ from latentoc.mocap.anthropometry import cmu_inertias
 from latentoc.mocap.skeleton_model import build_model
 from latentoc.mocap.symmetry import SymmetryMap, symmetrized_skeleton
 from latentoc.motions.readers import MotionFileError, read_raw_motion
-from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
-from latentoc.jump.legged_robot import CMU_HUMANOID, RobotDeclaration
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer, freeflyer_to_base
+from latentoc.jump.robot.declaration import CMU_HUMANOID, RobotDeclaration
 
 @lru_cache(maxsize=2)
 def jump_model(mass: float = 63.86, height: float = 1.75) -> tuple[pin.Model, SymmetryMap]:

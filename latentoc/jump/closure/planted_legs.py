@@ -1,7 +1,7 @@
 """The planted foot by construction: the legs' out-of-plane joints and, in contact, the base.
 
-For a left-right symmetric jump the base moves in the sagittal plane (:mod:`.base`), so the planted
-body (the toe tip's: the CMU's toes, a rigid sole; :func:`.cleaning.foot_bodies`) keeps its ground
+For a left-right symmetric jump the base moves in the sagittal plane (:mod:`..robot.sagittal_base`), so the planted
+body (the toe tip's: the CMU's toes, a rigid sole; :func:`..demonstration.planted.foot_bodies`) keeps its ground
 pose exactly when, relative to the base, it keeps its standing sideways offset and its orientation
 differs from the standing one by a rotation about y alone. These three conditions fix the leg's
 three out-of-plane joints (axes not along y standing: hip roll and yaw, ankle roll) from the
@@ -24,9 +24,9 @@ import pinocchio as pin
 from latentoc.dynamics import SymbolicModel
 from latentoc.errors import ProblemError
 from latentoc.mocap.symmetry import SymmetryMap
-from latentoc.jump.base import _ry
-from latentoc.jump.contact import FootGeometry, joint_embedding
-from latentoc.jump.cleaning import foot_bodies, leg_joints
+from latentoc.jump.robot.sagittal_base import _ry
+from latentoc.jump.robot.feet import FootGeometry, joint_embedding
+from latentoc.jump.demonstration.planted import foot_bodies, leg_joints
 
 __all__ = ["LegClosure", "NEWTON_STEPS"]
 

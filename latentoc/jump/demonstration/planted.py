@@ -2,7 +2,7 @@
 
 The captured toes move by about a centimetre in stance (and 3 cm sideways), and the toe tip sinks
 1.4 cm into the floor at the push-off, so a model that learns the capture learns feet that slide.
-The contact model of the NLP (:mod:`.contact`, :class:`.phases.Phases`) holds the toes flat on
+The contact model of the NLP (:mod:`..robot.feet`, :class:`..schedule.phases.Phases`) holds the toes flat on
 their ground points, and the foot flat while the heel is loaded; :func:`planted_training` makes
 the demonstration obey the same: the left toes body sits at its standing placement through the
 stance (at the standing orientation over the captured landing point through the landing), so the
@@ -22,10 +22,10 @@ import pinocchio as pin
 
 from latentoc.mocap.symmetry import SymmetryMap
 from latentoc.motions.planting import Plant, plant, taper
-from latentoc.jump.base import base_to_freeflyer, freeflyer_to_base
-from latentoc.jump.contact import POINTS, FootGeometry, point_joint
-from latentoc.jump.phases import Phases
-from latentoc.jump.training import JumpTraining
+from latentoc.jump.robot.sagittal_base import base_to_freeflyer, freeflyer_to_base
+from latentoc.jump.robot.feet import POINTS, FootGeometry, point_joint
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.demonstration.training import JumpTraining
 
 __all__ = ["PlantedTraining", "foot_bodies", "leg_joints", "learned_leg", "planted_training", "plantable"]
 

@@ -1,11 +1,11 @@
 """How a row family's nodes see the decision vector, and what its rows are: the pieces each row
-module (:mod:`.rows`) wires its block with.
+module (:mod:`..rows`) wires its block with.
 
 A :class:`Wiring` holds what every family needs (the robot, the GP or identity layer, the blocks, the phases,
 the settings, the selection, the variables and the path's spline); :class:`Rows` picks a block's outputs at
 its nodes as constraint rows, each with a name, a time and a component (the joint among the kept
 ones, the polygon edge, or the output's index), the row's identity across NLPs
-(:mod:`.warm`). :meth:`Wiring.add` turns them into a :class:`~latentoc.nlp.assemble.Family`.
+(:mod:`..solve.warm`). :meth:`Wiring.add` turns them into a :class:`~latentoc.nlp.assemble.Family`.
 """
 from __future__ import annotations
 
@@ -20,11 +20,11 @@ from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.evaluators import BlockEvaluator
 from latentoc.nlp.inputs import NodeInputs
 from latentoc.latent.spline import BSpline
-from latentoc.jump.phases import Phases
-from latentoc.jump.robot import JumpRobot
-from latentoc.jump.selection import Selection
+from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.transcription.selection import Selection
 from latentoc.jump.settings import JumpSettings
-from latentoc.jump.variables import JumpVariables
+from latentoc.jump.transcription.variables import JumpVariables
 
 __all__ = ["Rows", "Wiring"]
 
@@ -84,7 +84,7 @@ class Wiring:
 
     def latent(self, ni: NodeInputs, t: np.ndarray, orders: int = 3) -> None:
         """The path's value and time derivatives (``orders`` of them) at times t, at an event from the
-        side of the phase it ends (:meth:`.phases.Phases.closing`)."""
+        side of the phase it ends (:meth:`..schedule.phases.Phases.closing`)."""
         left = self.phases.closing(t)
         ni.spline([self.spline.basis(t, k, left) for k in range(orders)], self.variables.latent_index(), self.P_fixed)
 

@@ -1,7 +1,7 @@
 """Phase timing of the jump, its contact schedule and the path's knots at its events (Sect. 4.2).
 
 Takeoff and touchdown come from the training motion's contact timing, refined to the toe
-tip, on the body the stance and the landing plant (:mod:`.closure`):
+tip, on the body the stance and the landing plant (:mod:`..closure.planted_legs`):
 :func:`latentoc.mocap.jumps.detect_jumps` finds the flight by the feet's height (1.5 cm
 above their floor: 0.350 s and 0.683 s on the paper's jump); the toe tip, however, leaves
 the ground earlier and lands later.  Takeoff is the toe-off, the frame at which the toe tip
@@ -30,8 +30,8 @@ import pinocchio as pin
 from latentoc.errors import ProblemError
 from latentoc.mocap.jumps import detect_jumps
 from latentoc.latent.spline import BSpline
-from latentoc.jump.contact import POINTS, FootGeometry, foot_points, point_joint
-from latentoc.jump.training import JumpTraining
+from latentoc.jump.robot.feet import POINTS, FootGeometry, foot_points, point_joint
+from latentoc.jump.demonstration.training import JumpTraining
 
 CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
 
@@ -87,7 +87,7 @@ class Phases:
 
     def held(self, t: np.ndarray) -> np.ndarray:
         """Whether the heel body's hinge holds its standing angle (the foot flat in contact) at times t
-        (:mod:`.closure`)."""
+        (:mod:`..closure.planted_legs`)."""
         return self.flat(t) & self.on_ground(t)
 
     def closing(self, t: np.ndarray) -> np.ndarray:

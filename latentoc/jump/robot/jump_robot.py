@@ -1,6 +1,6 @@
 """What the jump's row families know of the robot: models, feet, limits, friction, mass.
 
-Nothing here depends on the GPDM: the row families (:mod:`.rows`) are Functions of the
+Nothing here depends on the GPDM: the row families (:mod:`..rows`) are Functions of the
 joint motion y, yd, ydd (the 37 learned coordinates, right side mirrored by E) and the
 node's other inputs, so they compile once per robot.
 """
@@ -15,11 +15,11 @@ import numpy as np
 from latentoc.dynamics import SymbolicModel
 from latentoc.min_torque.limits import Limits
 from latentoc.mocap.symmetry import SymmetryMap
-from latentoc.jump.base import base_function
-from latentoc.jump.closure import LegClosure
-from latentoc.jump.contact import POINTS, FootGeometry, joint_embedding, points_function
-from latentoc.jump.torque_limits import TorqueLimits, TrainingDynamics
-from latentoc.jump.zmp import G
+from latentoc.jump.robot.sagittal_base import base_function
+from latentoc.jump.closure.planted_legs import LegClosure
+from latentoc.jump.robot.feet import POINTS, FootGeometry, joint_embedding, points_function
+from latentoc.jump.robot.torque_limits import TorqueLimits, TrainingDynamics
+from latentoc.jump.robot.zmp import G
 
 SAGITTAL_ROWS = [0, 2, 4]  # x force, z force, y moment of the base rows
 
@@ -34,8 +34,8 @@ class JumpRobot:
     limits: TrainingDynamics | TorqueLimits
     mu: float
     mass: float
-    joint_limits: bool = False  # the model's position and velocity limits as rows (:mod:`.rows.limits`)
-    closure: LegClosure | None = None  # the planted foot: closed legs and the base in contact (:mod:`.closure`)
+    joint_limits: bool = False  # the model's position and velocity limits as rows (:mod:`..rows.joint_limits`)
+    closure: LegClosure | None = None  # the planted foot: closed legs and the base in contact (:mod:`..closure.planted_legs`)
 
     @property
     def weight(self) -> float:
@@ -126,7 +126,7 @@ class JumpRobot:
 
     def planted(self, y, yd, ydd, held, shift):
         """The contact phases' closed legs (y, yd, ydd) and sagittal base (b, bd, bdd): the planted body
-        at its ground pose moved by ``shift`` along x, the hinge held where ``held`` (:mod:`.closure`)."""
+        at its ground pose moved by ``shift`` along x, the hinge held where ``held`` (:mod:`..closure.planted_legs`)."""
         assert self.closure is not None, "the contact rows need the robot's leg closure"
         y, yd, ydd = self.closure.legs(y, yd, ydd, held)
         return (y, yd, ydd), self.closure.planted_base(y, yd, ydd, shift)
