@@ -43,9 +43,10 @@ SHARES = np.array([0.4, 0.3, 0.2, 0.1])  # of a foot's force: heel, ball, toe, p
 @lru_cache(maxsize=4)
 def _jump_arrays(stride: int) -> tuple[pin.Model, dict[str, np.ndarray]]:
     from latentoc.jump.robot.feet import MU, POINTS, foot_points
-    from latentoc.jump.demonstration.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
+    from latentoc.robots.cmu_humanoid import symmetric_model
 
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     training = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, training.Q[0])
     t, Q0 = training.t[::stride], training.Q[::stride]

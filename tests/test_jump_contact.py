@@ -6,7 +6,8 @@ from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 from latentoc.dynamics import SymbolicModel
 from latentoc.jump.robot.feet import point_forces
-from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import training_jumps
+from latentoc.robots.cmu_humanoid import symmetric_model
 
 
 def test_pyramid_forces_are_unilateral_and_in_the_cone():
@@ -22,7 +23,7 @@ def test_point_forces_act_on_their_own_bodies():
     numeric Pinocchio: rnea with the same forces as external forces on the joints' bodies."""
     from latentoc.jump.robot.feet import generator_columns, point_generalized_force, point_jacobians
 
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     tr = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     sym = SymbolicModel(model)
@@ -55,7 +56,7 @@ def test_point_forces_act_on_their_own_bodies():
 def test_numeric_foot_points_match_the_symbolic_ones():
     from latentoc.jump.robot.feet import foot_points, points_function
 
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     tr = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     sym_points = points_function(SymbolicModel(model), geom)
@@ -68,7 +69,7 @@ def test_numeric_foot_points_match_the_symbolic_ones():
 def test_the_pad_lies_behind_the_toe_tip_on_the_ground_when_standing():
     from latentoc.jump.robot.feet import foot_points
 
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     q = training_jumps()[0].Q[0]
     geom = CMU_HUMANOID.geometry(model, q)
     d = model.createData()

@@ -6,11 +6,12 @@ from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 from latentoc.jump.robot.feet import generator_columns, point_jacobians
 from latentoc.jump.check.export import corrected_edge_weights
-from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import training_jumps
+from latentoc.robots.cmu_humanoid import symmetric_model
 
 
 def _static():
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     q = training_jumps()[0].Q[0]
     d = model.createData()
     z = np.zeros(model.nv)

@@ -4,11 +4,12 @@ import numpy as np
 from latentoc.jump.robot.declaration import CMU_HUMANOID
 from latentoc.jump.schedule.phases import toe_heights, training_phases
 from latentoc.mocap.jumps import detect_jumps
-from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import training_jumps
+from latentoc.robots.cmu_humanoid import symmetric_model
 
 
 def test_phases_and_grid():
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     tr = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     ph = training_phases(model, tr, geom, schedule=False)
@@ -33,7 +34,7 @@ def test_contact_schedule_follows_the_training_heel_and_ball():
     from latentoc.jump.robot.feet import foot_points
     from latentoc.jump.schedule.phases import CONTACT_HEIGHT
 
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     tr = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     ph = training_phases(model, tr, geom)

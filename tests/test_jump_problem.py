@@ -192,10 +192,11 @@ def test_plant_training_learns_and_limits_the_planted_jump():
     are the planted jump's own inverse dynamics: every torque of its B-spline fit lies inside them."""
     from latentoc.jump.demonstration.planted import planted_training
     from latentoc.jump.schedule.phases import training_phases
-    from latentoc.jump.demonstration.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
+    from latentoc.robots.cmu_humanoid import symmetric_model
 
     js = jp.setup(0, stride=3, plant=True)
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     tr = training_jumps(0)[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     planted = planted_training(model, smap, tr, training_phases(model, tr, geom), geom)

@@ -4,11 +4,12 @@ from latentoc.jump.robot.declaration import CMU_HUMANOID
 
 from latentoc.jump.schedule.phases import training_phases
 from latentoc.jump.robot.torque_limits import estimate_training_dynamics
-from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import training_jumps
+from latentoc.robots.cmu_humanoid import symmetric_model
 
 
 def test_training_forces_and_limits():
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     tr = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     ph = training_phases(model, tr, geom, schedule=False)
@@ -38,7 +39,7 @@ def test_training_forces_and_limits():
 def test_schedule_unloads_the_heel_after_heel_off():
     """With the contact schedule the heel carries no force after heel-off (and the ball none
     after ball-off); the toe alone must then balance what it can."""
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     tr = training_jumps()[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     ph = training_phases(model, tr, geom)

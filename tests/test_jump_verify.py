@@ -7,13 +7,14 @@ import pinocchio as pin
 import pytest
 
 from latentoc.jump.robot.feet import FootGeometry
-from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import training_jumps
+from latentoc.robots.cmu_humanoid import symmetric_model
 from latentoc.jump.check.export import contact_geometry
 from latentoc.jump.check.verify import sagittal_contact_wrench, verify
 
 
 def _static_arrays(n: int = 5) -> tuple[pin.Model, dict]:
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     tr = training_jumps()[0]
     q = tr.Q[0]
     geom = CMU_HUMANOID.geometry(model, q)
@@ -43,7 +44,7 @@ def test_static_stance_is_verified():
 
 
 def test_sagittal_contact_wrench_balances_the_base_rows():
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     q = training_jumps()[0].Q[40]  # a symmetric pose of the push-off, not at rest
     rng = np.random.default_rng(3)
     d = model.createData()

@@ -2,12 +2,14 @@
 import numpy as np
 import pinocchio as pin
 
-from latentoc.jump.demonstration.training import jump_model, training_jumps
+from latentoc.jump.demonstration.training import training_jumps
+
+from latentoc.robots.cmu_humanoid import symmetric_model
 from latentoc.jump.robot.zmp import G, zmp
 
 
 def test_static_pose_zmp_is_projected_com():
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     q = training_jumps()[0].Q[0]
     d = model.createData()
     z = np.zeros(model.nv)

@@ -14,9 +14,10 @@ from latentoc.motions.planting import Plant, PlantingError, plant, taper
 
 @pytest.fixture(scope="module")
 def captured():
-    from latentoc.jump.demonstration.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
+    from latentoc.robots.cmu_humanoid import symmetric_model
 
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     return model, smap, training_jumps(0)[0]
 
 
@@ -90,9 +91,10 @@ def test_cleaned_training_keeps_the_feet_on_their_ground_points():
     from latentoc.jump.demonstration.planted import planted_training
     from latentoc.jump.robot.feet import POINTS, foot_points
     from latentoc.jump.schedule.phases import training_phases
-    from latentoc.jump.demonstration.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
+    from latentoc.robots.cmu_humanoid import symmetric_model
 
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     tr = training_jumps(0)[0]
     geom = CMU_HUMANOID.geometry(model, tr.Q[0])
     ph = training_phases(model, tr, geom)

@@ -214,9 +214,10 @@ def test_convergence_draws_each_run_after_the_previous(tmp_path):
 def test_contact_series_of_a_static_stance():
     """A pose held still on both feet: the ZMP is the COM's ground projection (Eq. 35 with dh = 0),
     inside the feet's polygon by the COM's margin; the friction ratio is the wrench's."""
-    from latentoc.jump.demonstration.training import jump_model, training_jumps
+    from latentoc.jump.demonstration.training import training_jumps
+    from latentoc.robots.cmu_humanoid import symmetric_model
 
-    model, _ = jump_model()
+    model, _ = symmetric_model()
     q = training_jumps()[0].Q[0]
     n = 3
     wrench = np.tile([20.0, 0.0, 300.0, 0.0, 6.0, 0.0], (n, 1))

@@ -21,9 +21,9 @@ FEET = ["lfoot", "lfoot_end", "ltoes_end", "rfoot", "rfoot_end", "rtoes_end"]
 
 
 def _cmu():
-    from latentoc.jump.demonstration.training import jump_model
+    from latentoc.robots.cmu_humanoid import symmetric_model
 
-    return jump_model()[0]
+    return symmetric_model()[0]
 
 
 def _talos():

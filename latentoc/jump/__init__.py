@@ -14,8 +14,8 @@ Its modules, a folder per stage in the order the data flows:
 
 2. :mod:`.demonstration` - the training jump:
 
-   * :mod:`.demonstration.training` - the symmetric CMU model and the symmetric training jump (37
-     learned DOF);
+   * :mod:`.demonstration.training` - the symmetric training jump (37 learned DOF) on the
+     symmetrised CMU humanoid (:mod:`latentoc.robots.cmu_humanoid`);
    * :mod:`.demonstration.planted` - its feet planted before the GPDM learns it;
 
 3. :mod:`.schedule` - when and along what:

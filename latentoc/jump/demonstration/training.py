@@ -1,8 +1,7 @@
 """Symmetric jump model and training motion (Kang & Park 2015, Sect. 4.2, Table 5).
 
-* The model is built from :func:`~latentoc.mocap.symmetry.symmetrized_skeleton`
-  (63.86 kg, 1.75 m, de Leva masses) so that mirrored joint motions are exactly
-  symmetric.
+* The model is the symmetrised CMU humanoid (:mod:`latentoc.robots.cmu_humanoid`), so that
+  mirrored joint motions are exactly symmetric.
 * The learned coordinates are the 37 left + centre DOFs of
   :class:`~latentoc.mocap.symmetry.SymmetryMap`; the right side is the mirror image.
   The centre DOFs that flip sign under the mirror (ry, rz of the spine, neck and head)
@@ -15,27 +14,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from latentoc.robots.human_models import broad_jump_sequences, cmu_skeleton
-from latentoc.mocap.anthropometry import cmu_inertias
-from latentoc.mocap.skeleton_model import build_model
-from latentoc.mocap.symmetry import SymmetryMap, symmetrized_skeleton
+from latentoc.robots.cmu_humanoid import symmetric_model
+from latentoc.robots.human_models import broad_jump_sequences
+from latentoc.mocap.symmetry import SymmetryMap
 from latentoc.motions.readers import MotionFileError, read_raw_motion
 from latentoc.jump.robot.sagittal_base import base_to_freeflyer, freeflyer_to_base
 from latentoc.jump.robot.declaration import CMU_HUMANOID, RobotDeclaration
-
-@lru_cache(maxsize=2)
-def jump_model(mass: float = 63.86, height: float = 1.75) -> tuple[pin.Model, SymmetryMap]:
-    """The symmetrised CMU humanoid (nq 63, nv 62) and its symmetry map."""
-    sk = symmetrized_skeleton(cmu_skeleton())
-    root, inert = cmu_inertias(sk, mass, height)
-    model = build_model(sk, inertias=inert, root_inertia=root, name="cmu_humanoid_sym")
-    return model, SymmetryMap(model, sk)
 
 
 def antisymmetric_centre(smap: SymmetryMap) -> np.ndarray:
@@ -90,7 +79,7 @@ def motion_training(path: Path, model: pin.Model, smap: SymmetryMap, robot: Robo
 def training_jumps(which: str | int = 0, robot: RobotDeclaration = CMU_HUMANOID) -> list[JumpTraining]:
     """Symmetric training jumps of take 01_01: ``0`` (the paper's single jump) or ``"all"``, with the
     CMU humanoid's feet as ``robot`` declares them."""
-    model, smap = jump_model()
+    model, smap = symmetric_model()
     seqs = broad_jump_sequences()
     chosen = seqs if which == "all" else [seqs[int(which)]]
     return [symmetric_motion(Q, t, model, smap, robot) for t, Q in chosen]

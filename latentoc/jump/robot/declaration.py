@@ -33,6 +33,7 @@ import pinocchio as pin
 from latentoc.errors import ProblemError
 from latentoc.mocap.symmetry import MirrorError, SymmetryMap
 from latentoc.robots.catalog import load_robot, robot_names
+from latentoc.robots.cmu_humanoid import symmetric_model
 from latentoc.problem.schema import Check, choice
 from latentoc.jump.robot.feet import MIRROR, POINTS, ContactPoint, FootGeometry, foot_points
 
@@ -210,9 +211,7 @@ def robot_model(decl: RobotDeclaration) -> tuple[pin.Model, SymmetryMap]:
     """The model and its joints' mirror: the CMU humanoid's from its skeleton, a URDF robot's from
     its joint names (:meth:`SymmetryMap.from_joint_names`)."""
     if decl.model == "cmu-humanoid":
-        from latentoc.jump.demonstration.training import jump_model
-
-        return jump_model()
+        return symmetric_model()
     model = load_robot(decl.model)
     if model.joints[1].shortname() != "JointModelFreeFlyer":
         raise ProblemError(f"key 'robot.model': {decl.model!r} has a fixed base; a contact problem needs a floating one")
