@@ -2,8 +2,6 @@
 from types import SimpleNamespace
 from latentoc.jump.robot.declaration import CMU_HUMANOID
 
-import dataclasses
-
 import numpy as np
 import pytest
 
@@ -123,9 +121,8 @@ def test_a_warm_start_that_does_not_fit_the_nlp_is_refused_by_name(small_jump):
     sj = small_jump
     n, m = sj.nlp.variables.n, sj.nlp.nlp.m
     bad = {"tube": 0.02, "nlp": sj.nlp, "x0": np.zeros(n + 3), "lam_g0": np.zeros(m), "lam_x0": np.zeros(n + 3)}
-    settings = dataclasses.replace(sj.settings, exchange=False)
     with pytest.raises(ValueError, match="warm start: its point") as exc:
-        solve_jump(sj.robot, sj.layer, sj.blocks, sj.js.phases, settings, sj.js.init, sj.js.model, warm=bad)
+        solve_jump(sj.robot, sj.layer, sj.blocks, sj.js.phases, sj.settings, sj.js.init, sj.js.model, warm=bad)
     assert str(n + 3) in str(exc.value) and str(n) in str(exc.value)
 
 

@@ -18,6 +18,7 @@ from scipy.integrate import cumulative_trapezoid
 from jump_reference import (SAGITTAL, flight_base, foot_points, full_state, generalized_force, joint_motion,
                             mass_of, momentum, pitch_rate_for, point_forces, polygon_rows)
 from latentoc.jump.robot.sagittal_base import freeflyer_to_base
+from latentoc.jump.rows.flight import FLIGHT_SUBSTEPS
 from latentoc.jump.transcription.nlp import build_nlp
 from latentoc.jump.robot.zmp import G
 
@@ -216,7 +217,7 @@ def test_pitch_rate_keeps_the_angular_momentum(small_jump):
         L = momentum(model, data, q, v)[2]
         assert np.isclose(float(block(y, yd, ydd, [L])), bd[2], rtol=1e-10, atol=1e-10)
     parts = jn.variables.unpack(sj.x0)
-    tau, nsub = jn.tau_fine, jn.flight_substeps
+    tau, nsub = jn.tau_fine, FLIGHT_SUBSTEPS
     Y, Yd, _ = joint_motion(sj.layer, jn.spline, P, ph.takeoff + tau)
     pd = np.array([pitch_rate_for(model, data, smap, Y[i], Yd[i], parts["L_to"][0]) for i in range(len(tau))])
     integral = cumulative_trapezoid(pd, tau, initial=0.0)[::nsub]

@@ -79,18 +79,14 @@ def test_node_wrench_mismatch_against_the_needed_wrench():
 
 @pytest.mark.skipif(not os.environ.get("LATENTOC_SLOW"), reason="a jump solve takes minutes on 2 shared cores")
 def test_quick_solve_verifies():
-    """The packaged jump without torque limits and polygon rows at a wide tube: solved, and its
+    """The packaged jump at a wide tube: solved, and its
     1 kHz export checked by numeric Pinocchio (base rows balanced, ballistic flight, symmetric), its
     loaded points still on the ground (the planted foot by construction: no travel, no work of the
     ground), and farther than the feasible point nearest the training fit (phase 1)."""
-    import dataclasses
-
     from latentoc.problem.toml_files import load_problem
     from latentoc.jump.problem import solve_jump_problem as solve
 
-    p = load_problem("broad-jump")
-    p = dataclasses.replace(p, options={**p.options, "torque_limits": False, "polygon": False})
-    r = solve(p, tube=0.2).result
+    r = solve(load_problem("broad-jump"), tube=0.2).result
     assert r["success"] and r["max_dynamics_residual"] < 0.2 and r["max_lateral_residual"] < 1e-6
     assert r["max_flight_residual"] < 1e-8 and r["distance"] > r["phase1"]["distance"]
     assert r["max_loaded_travel"] < 1e-9 and abs(r["ground_work_positive"]) < 1e-6

@@ -74,10 +74,11 @@ def _edited(tmp_path, name, old, new):
     ("broad-jump", ("dim = 3", "dim = 3\nboundary = \"rest\""), r"unknown key 'latent.boundary'; \[latent\] .* "
                                                                    "allows: control_points, dim, tube"),
     ("broad-jump", ("friction = 0.4", "friction = 0.4\nmass = 63.86"), r"unknown key 'options.mass'; \[options\] "
-                                                                       "allows: exchange, exchange_rounds"),
+                                                                       "allows: friction, leg_residual"),
     ("broad-jump", ("friction = 0.4", 'friction = "high"'), "key 'options.friction' must be a number > 0, got 'high'"),
     ("broad-jump", ("n_flight = 80", "n_flight = 80.5"), "key 'options.n_flight' must be an integer >= 2, got 80.5"),
-    ("broad-jump", ("two_phase = true", "two_phase = 1"), "key 'options.two_phase' must be true or false, got 1"),
+    ("broad-jump", ("plant_training = true", "plant_training = 1"),
+     "key 'options.plant_training' must be true or false, got 1"),
     ("broad-jump", ('sweep_starts = "warm"', 'sweep_starts = "cold"'), "key 'options.sweep_starts' must be one of "
                                                                             "'warm\\+cold', 'warm', got 'cold'"),
     ("broad-jump", ("training_stride = 1", "training_stride = 0"), "options.training_stride' must be an integer >= 1"),
@@ -108,9 +109,9 @@ def test_jump_options_are_the_jump_settings():
             assert problem.options[key[8:]] == getattr(defaults, f.name), f.name
     s = settings_from_problem(problem, 0.02)
     assert s.mu == data["friction"] and s.n_flight == data["n_flight"] and s.n_control == 27 and s.tube == 0.02
-    assert s.exchange_rounds == defaults.exchange_rounds  # not in the file: JumpSettings' default
     assert {k for k, v in OPTIONS.items() if v is None} == {"training_jumps", "training_stride", "torque_margin",
-                                                            "torque_floor", "plant_training", "sweep_starts"}
+                                                            "torque_floor", "plant_training", "sweep_starts",
+                                                            "leg_residual"}
 
 
 def test_overrides_are_checked_like_the_file():
@@ -149,7 +150,7 @@ def test_show_prints_every_resolved_setting():
     assert len(text.splitlines()) == 2 + len(rows)
     assert 'latent.tube = "5x"' in text and "gpdm.training_stride = 6" in text
     assert f"gpdm.seed = {GPDMSettings().seed}" in text  # not in the file: GPDMSettings' default
-    assert "options.exchange_rounds = 8" in describe_problem(load_problem("broad-jump"))
+    assert "options.torque_margin = 0.1" in describe_problem(load_problem("g1-broad-jump"))  # not in that file
 
 
 def test_missing_file_and_bad_toml(tmp_path):

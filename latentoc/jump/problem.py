@@ -149,7 +149,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 27, tor
 # ------------------------------------------------------------------ the problem file
 SWEEP_STARTS = ("warm+cold", "warm")  # a tube after a solved smaller one: both starts, or warm only
 
-#: the set-up's own ``[options]`` (not JumpSettings fields): key -> (check, default, doc)
+#: the ``[options]`` the set-up and the solve read themselves (not JumpSettings fields): key -> (check, default, doc)
 SETUP_OPTIONS: dict[str, tuple[Check, Any, str]] = {
     "training_jumps": (choice("one", "all"), "one", '"one" (the paper) or "all" (every jump of take 01_01)'),
     "training_stride": (integer(1), 1, "the GPDM learns every k-th captured frame (120 Hz)"),
@@ -158,6 +158,8 @@ SETUP_OPTIONS: dict[str, tuple[Check, Any, str]] = {
     "plant_training": (boolean(), False, "plant the training jump's feet before learning (least joint change)"),
     "sweep_starts": (choice(*SWEEP_STARTS), SWEEP_STARTS[0],
                      "a tube after a solved smaller one: solved warm and cold (the better kept), or warm"),
+    "leg_residual": (number(0.0), 0.0, "deg: a bounded residual on the legs' sagittal joints beside the latent path "
+                                        "(0: none)"),
 }
 #: JumpSettings fields set by other tables of the file, not by [options]
 _ELSEWHERE = {"tube": "latent.tube", "n_control": "latent.control_points", "hessian": "solver.hessian",
@@ -166,9 +168,7 @@ _TOML_NAMES = {"mu": "friction"}  # JumpSettings field -> its [options] key
 #: ranges of the JumpSettings fields in [options] (lo, hi, lo_open); a field not listed has its type only
 RANGES: dict[str, tuple[float | None, float | None, bool]] = {
     "mu": (0.0, None, True), "n_stance": (2, None, False), "n_flight": (2, None, False), "n_land": (2, None, False),
-    "flight_substeps": (1, None, False),
-    "tube_spacing": (0.0, None, True), "sample_spacing": (0.0, None, False),
-    "exchange_rounds": (1, None, False), "leg_residual": (0.0, None, False)}
+    "sample_spacing": (0.0, None, False)}
 
 
 def _field_check(name: str, type_name: str) -> Check:

@@ -53,8 +53,7 @@ class Exchange(Generic[N, A]):
         self.solve, self.record, self.check, self.grow, self.resume = solve, record, check, grow, resume
 
 
-def exchange_rounds(nlp: N, start: Any, kind: Exchange[N, A], max_rounds: int, exchange: bool = True
-                    ) -> tuple[N, IpoptResult, list[dict]]:
+def exchange_rounds(nlp: N, start: Any, kind: Exchange[N, A], max_rounds: int) -> tuple[N, IpoptResult, list[dict]]:
     """Solve ``nlp`` from ``start``, then check, grow and resume until the 1 kHz grid holds, a run
     fails, or ``max_rounds`` runs (module doc): the last NLP and run and each round's summary with
     its ``violation_1khz``."""
@@ -66,7 +65,7 @@ def exchange_rounds(nlp: N, start: Any, kind: Exchange[N, A], max_rounds: int, e
         if not run.success:
             break
         add, entry["violation_1khz"] = kind.check(nlp, run)
-        if add is None or not exchange or len(rounds) >= max_rounds:
+        if add is None or len(rounds) >= max_rounds:
             break
         grown = kind.grow(nlp, add)
         start = kind.resume(nlp, grown, run)

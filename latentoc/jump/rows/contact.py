@@ -73,15 +73,15 @@ def block(robot: JumpRobot, d: int) -> RobotBlock:
 def _rows_at(rows: Rows, w: Wiring, k: int, t: float, torque: np.ndarray, polygon: np.ndarray) -> None:
     """A contact node's or sample's rows: base rows and centre of pressure always; the chosen torque
     rows; the chosen ZMP edges in the landing and COM edges once it has settled."""
-    robot, ph, s = w.robot, w.phases, w.settings
+    robot, ph = w.robot, w.phases
     kept = robot.unmirrored
     at = np.array([t])
     rows.add(k, "dynamics")
     rows.add(k, "cop_front")
     rows.add(k, "cop_heel" if ph.loaded("heel", at)[0] else "cop_ball" if ph.loaded("ball", at)[0] else "cop_pad")
-    if s.torque_limits and torque.any():
+    if torque.any():
         rows.add(k, "torque", 1.0 / robot.torque_scale[kept[torque]], kept[torque])
-    if s.polygon and ph.landed(t):
+    if ph.landed(t):
         zmp, com = polygon[:POLYGON_EDGES], polygon[POLYGON_EDGES:]
         if zmp.any():
             rows.add(k, "zmp_polygon", subset=np.flatnonzero(zmp))

@@ -27,6 +27,8 @@ DYNAMICS_INPUTS = {"pd": 1, "acc": 3}  # pitch rate; base accelerations (x, z, p
 CLEARANCE_INPUTS = {"p": 1, "L": 1, "c_to": 2, "cd_to": 2, "t": 1}
 PITCH_RATE_INPUTS = {"L": 1}
 
+FLIGHT_SUBSTEPS = 2  # trapezoid steps of the pitch rate per flight node interval
+
 
 def ballistic_com(c_to, cd_to, t):
     """COM position and velocity (x, z) at flight time t from the takeoff state."""
@@ -70,9 +72,9 @@ def pitch_rate_block(robot: JumpRobot, d: int) -> RobotBlock:
 
 def wire_pitch(w: Wiring) -> None:
     """The flight nodes' pitch: p_k - p_0 = int_0^tau_k pd, the pitch rate of the conserved momentum
-    integrated by the trapezoid rule on ``flight_substeps`` steps per node interval."""
+    integrated by the trapezoid rule on :data:`FLIGHT_SUBSTEPS` steps per node interval."""
     tf, var, ph = w.grid["flight"], w.variables, w.phases
-    nF, nsub = len(tf), max(1, int(w.settings.flight_substeps))
+    nF, nsub = len(tf), FLIGHT_SUBSTEPS
     tau = pitch_grid(tf - ph.takeoff, nsub)
     ni = w.inputs(len(tau))
     w.latent(ni, ph.takeoff + tau)
@@ -106,7 +108,7 @@ def wire_samples(w: Wiring) -> None:
     rows = Rows(w.blocks["flight_dynamics"])
     for k in range(len(tfs)):
         rows.add(k, "flight_base")
-        if w.settings.torque_limits and sel.flight_torque[k].any():
+        if sel.flight_torque[k].any():
             m = sel.flight_torque[k]
             rows.add(k, "torque", 1.0 / robot.torque_scale[kept[m]], kept[m])
     w.add("flight", ni, rows, tfs)

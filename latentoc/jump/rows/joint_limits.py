@@ -1,7 +1,7 @@
 """The robot's joint position and velocity limits along the whole jump, from its description (a
 URDF's ``<limit lower upper velocity>``): rows on the learned coordinates y and their rates yd
 (a right joint's limits mirrored onto its left partner, :attr:`JumpRobot.joint_bounds`), every
-``tube_spacing`` seconds. A robot without limits (the CMU humanoid) has no such block.
+:data:`~latentoc.jump.rows.tube_rows.TUBE_SPACING` seconds. A robot without limits (the CMU humanoid) has no such block.
 """
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from latentoc.nlp.blocks import RobotBlock
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.transcription.wiring import Rows, Wiring
 from latentoc.jump.rows import inputs
+from latentoc.jump.rows.tube_rows import TUBE_SPACING
 
 LIMIT_BACKOFF = 5e-3  # rad and rad/s inside the limits: the rows hold between their samples too (5 ms apart)
 
@@ -38,7 +39,7 @@ def wire(w: Wiring) -> None:
     if "joint_limits" not in w.blocks:
         return
     pos, vel = limited(w.robot)
-    t = np.arange(0.0, w.phases.duration + 1e-9, w.settings.tube_spacing)
+    t = np.arange(0.0, w.phases.duration + 1e-9, TUBE_SPACING)
     ni = w.inputs(len(t))
     w.latent(ni, t)
     rows = Rows(w.blocks["joint_limits"])

@@ -12,6 +12,8 @@ from latentoc.nlp.assemble import Family
 from latentoc.nlp.evaluators import VarianceEvaluator
 from latentoc.jump.transcription.wiring import Wiring
 
+TUBE_SPACING = 0.005  # s between the tube's points (and the joint limits' rows)
+
 
 def wire(w: Wiring) -> None:
     t = np.asarray(w.selection.tube, float)

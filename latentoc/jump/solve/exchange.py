@@ -9,8 +9,8 @@ of the ground (:func:`clearance`; the loaded ones hold theirs by construction). 
 worst 1 kHz time and its neighbours (contact: its own edge weights and the rows that are near
 there; flight: its own free-fall variables and torque rows; the tube: a point), and the contact
 nodes' own torque and polygon rows that are near are switched on; then the solve resumes warm
-(:mod:`.warm`). It ends when nothing on the 1 kHz grid is violated beyond :data:`TOLERANCE`
-(the loop: :func:`latentoc.nlp.exchange_rounds.exchange_rounds`).
+(:mod:`.warm`). It ends when nothing on the 1 kHz grid is violated beyond :data:`TOLERANCE`, or
+after :data:`EXCHANGE_ROUNDS` runs (the loop: :func:`latentoc.nlp.exchange_rounds.exchange_rounds`).
 """
 from __future__ import annotations
 
@@ -27,10 +27,11 @@ from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.transcription.selection import POLYGON_EDGES, Selection
 from latentoc.jump.settings import JumpSettings
 
-__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING"]
+__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING", "EXCHANGE_ROUNDS"]
 
 NEIGHBOUR = 0.002  # s: either side of a short stretch's worst time (a bound moves a little)
 SPACING = 0.005  # s between the samples along a stretch that comes near
+EXCHANGE_ROUNDS = 8  # phase 2's Ipopt runs at the most
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from latentoc.jump.closure.ballistic import ballistic_base, flight_functions
 from latentoc.jump.transcription.nlp import JumpNLP
 from latentoc.jump.schedule.phases import Phases
 from latentoc.jump.robot.jump_robot import JumpRobot
+from latentoc.jump.rows.flight import FLIGHT_SUBSTEPS
 
 __all__ = ["initial_point", "sample_values", "balanced_forces", "takeoff_state"]
 
@@ -51,7 +52,7 @@ def initial_point(robot: JumpRobot, layer: Layer, nlp: JumpNLP, phases: Phases, 
     bb = ballistic_base(fns, Yf[0], Yf[1], Yf[2], tau_fine, b_to, bd_to, y_to, yd_to)
     nC = var.shapes["lam"][0]
     x0 = var.pack({"P": P[1:-1], "x_L": x_L, "lam": np.full((nC, EDGES), 1.0 / (2 * EDGES)), "c_to": c, "cd_to": cd,
-                   "L_to": L, "pitch_flight": bb[0][2, ::nlp.flight_substeps]})
+                   "L_to": L, "pitch_flight": bb[0][2, ::FLIGHT_SUBSTEPS]})
     return sample_values(nlp, balanced_forces(nlp, np.clip(x0, nlp.lbx, nlp.ubx)))
 
 

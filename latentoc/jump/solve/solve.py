@@ -120,8 +120,8 @@ class _Solve:
         self.lap("solve_s")
         return run
 
-    def phase1(self) -> tuple[JumpNLP, np.ndarray, ipopt.IpoptResult | None]:
-        """The training start and, with two phases, the feasible point nearest it: every row of the
+    def phase1(self) -> tuple[JumpNLP, np.ndarray, ipopt.IpoptResult]:
+        """The training start and the feasible point nearest it: every row of the
         nodes (Ipopt takes 3x the iterations with only those near binding) and the flight samples
         near binding at the start."""
         s, st = self.s, self.start
@@ -135,8 +135,6 @@ class _Solve:
                                                       columns=self.layer.latent_coordinates)
         x = initial_point(self.robot, self.layer, full, self.ph, P, x_L)
         self.lap("build_s")
-        if not s.two_phase:
-            return full, x, None
         traj, sr, place = self.check(full, x)
         seed = exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph, s, self.tube)
         nodes = full.selection
@@ -182,7 +180,7 @@ class _Solve:
 
         kind = Exchange(solve=solve, record=lambda nlp, run: {**_run_summary(run, nlp), "history": run.history}, check=check,
                         grow=lambda nlp, more: self.build("distance", more), resume=resume)
-        return exchange_rounds(nlp2, start, kind, s.exchange_rounds, s.exchange)
+        return exchange_rounds(nlp2, start, kind, exchange.EXCHANGE_ROUNDS)
 
 
 def solve_jump(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], phases: Phases,

@@ -36,7 +36,8 @@ from latentoc.jump.robot.feet import EDGES, POINTS
 from latentoc.jump.schedule.phases import Phases
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.rows import families, joint_limits
-from latentoc.jump.rows.flight import pitch_grid
+from latentoc.jump.rows.flight import FLIGHT_SUBSTEPS, pitch_grid
+from latentoc.jump.rows.tube_rows import TUBE_SPACING
 from latentoc.jump.transcription.selection import Selection
 from latentoc.jump.settings import JumpSettings
 from latentoc.jump.transcription.variables import JumpVariables
@@ -74,7 +75,6 @@ class JumpNLP:
     objective: str
     P_fixed: np.ndarray
     tau_fine: np.ndarray  # flight times (from takeoff) of the pitch integration
-    flight_substeps: int
 
     def control_points(self, w: np.ndarray) -> np.ndarray:
         """All latent control points of solution ``w``: the fixed end points and the free ones."""
@@ -98,12 +98,12 @@ def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
 
 
 def tube_times(settings: JumpSettings, phases: Phases, layer: Layer) -> np.ndarray:
-    """The tube every ``tube_spacing`` inside the motion (its ends are the fixed end points); none on
+    """The tube every :data:`~latentoc.jump.rows.tube_rows.TUBE_SPACING` inside the motion (its ends are the fixed end points); none on
     a joint path, which has no GPDM variance."""
     if not layer.has_tube:
         return np.zeros(0)
     T = phases.duration
-    return np.linspace(0.0, T, max(2, int(round(T / settings.tube_spacing)) + 1))[1:-1]
+    return np.linspace(0.0, T, max(2, int(round(T / TUBE_SPACING)) + 1))[1:-1]
 
 
 def contact_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
@@ -165,9 +165,8 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
         P0 = np.asarray(P_fixed, float)[1:-1]
         half = np.broadcast_to(np.asarray(P_range, float), P0.shape)
         lbx[var.slices["P"]], ubx[var.slices["P"]] = (P0 - half).ravel(), (P0 + half).ravel()
-    nsub = max(1, int(s.flight_substeps))
     return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, spline, sel, objective,
-                   np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, nsub), nsub)
+                   np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, FLIGHT_SUBSTEPS))
 
 
 def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Function:
