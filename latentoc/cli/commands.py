@@ -320,11 +320,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from latentoc.benchmarks import arm_bench, blocks_bench, dynamics_bench, gpdm_bench, jump_bench, planting_bench, sampling_bench
+    from latentoc.benchmarks import arm_bench, blocks_bench, dynamics_bench, gpdm_bench, jump_bench, sampling_bench
 
     benchmarks = {"arm": arm_bench.main, "blocks": blocks_bench.main, "dynamics": dynamics_bench.main,
-                  "gpdm": gpdm_bench.main, "jump": jump_bench.main, "planting": planting_bench.main,
-                  "sampling": sampling_bench.main}
+                  "gpdm": gpdm_bench.main, "jump": jump_bench.main, "sampling": sampling_bench.main}
     name = args.name.replace("-", "_")
     if name not in benchmarks:
         raise LatentocError(f"unknown benchmark {args.name!r}; known: {', '.join(benchmarks)}")

@@ -179,7 +179,7 @@ def _reproduce_arguments(sub: Any) -> None:
 def _bench_arguments(sub: Any) -> None:
     """The ``bench`` command's arguments."""
     b = sub.add_parser("bench", help="run latentoc.benchmarks.<NAME>_bench")
-    b.add_argument("name", help="dynamics, gpdm, blocks, arm, jump, planting or sampling")
+    b.add_argument("name", help="dynamics, gpdm, blocks, arm, jump or sampling")
     b.add_argument("rest", nargs=argparse.REMAINDER, help="the benchmark's own arguments (bench NAME --help)")
 
 
