@@ -31,14 +31,14 @@ import pinocchio as pin
 from latentoc.runtime.environment import Environment
 from latentoc.errors import ResultFileError
 from latentoc.arguments import expect
-from latentoc.runtime.files import NPZ_ERRORS, atomic_write, dumps_json, json_number, plain, sha256, write_folder
+from latentoc.runtime.files import NPZ_ERRORS, dumps_json, json_number, plain, sha256, write_folder
 from latentoc.gpdm import GPDM
 from latentoc.problem.kinds import Solution
 from latentoc.problem.declaration import Problem
 from latentoc.latent.tube import TubeResult
 
 __all__ = ["Result", "Times", "load_result", "SCHEMA_VERSION", "TRAJECTORY_KEYS",
-           "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "atomic_write", "write_json", "convergence_entry",
+           "RESULT_NAME", "TRAJECTORY_NAME", "GPDM_NAME", "convergence_entry",
            "HISTORY_KEYS", "result_and_output"]
 
 SCHEMA_VERSION = 1
@@ -396,8 +396,3 @@ def write_files(files: Mapping[str, bytes], out_dir: str | Path, marker: str = R
     (:func:`latentoc.runtime.files.write_folder`, ``marker`` last); returns the paths, the marker first."""
     paths = write_folder(files, out_dir, marker, owned=(RESULT_NAME, TRAJECTORY_NAME, GPDM_NAME))
     return sorted(paths, key=lambda p: (p.name != marker, p.name != TRAJECTORY_NAME))
-
-
-def write_json(path: Path, data: Any) -> None:
-    """Atomically write ``data`` as indented, strict JSON."""
-    atomic_write(Path(path), lambda f: f.write(dumps_json(data)))

@@ -40,7 +40,8 @@ from latentoc.problem.kinds import kind_of
 from latentoc.problem.declaration import Problem
 from latentoc.problem.toml_files import problem_from_dict
 from latentoc.errors import ResultFileError
-from latentoc.results import RESULT_NAME, Result, atomic_write, load_result, write_files, write_json
+from latentoc.results import RESULT_NAME, Result, load_result, write_files
+from latentoc.runtime.files import atomic_write, write_json
 from latentoc.latent.tube import parse_tube, resolve_tube
 
 __all__ = ["SweepTask", "SweepFailure", "SweepResult", "sweep", "sweep_tasks", "run_task", "format_table",

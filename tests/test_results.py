@@ -12,7 +12,8 @@ from result_factory import make_result
 from latentoc.errors import LatentocError, ResultFileError
 from latentoc.problem.kinds import Solution
 from latentoc.results import (GPDM_NAME, RESULT_NAME, SCHEMA_VERSION, TRAJECTORY_KEYS, TRAJECTORY_NAME, Result,
-                              atomic_write, load_result)
+                              load_result)
+from latentoc.runtime.files import atomic_write
 from latentoc.latent.tube import TubeResult
 
 

@@ -18,7 +18,7 @@ from latentoc.runtime.files import check_out_dir
 from latentoc.runtime.interrupts import finish
 from latentoc.results import Result
 
-__all__ = ["summary", "tube_arg", "overrides", "cmd_learn", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
+__all__ = ["summary", "tube_arg", "overrides", "cmd_plot", "cmd_view", "cmd_notebooks", "cmd_list",
            "cmd_show", "cmd_solve", "cmd_sweep", "cmd_start_poses", "cmd_reproduce", "cmd_bench", "cmd_retarget"]
 
 
@@ -36,32 +36,6 @@ def overrides(args: argparse.Namespace, *names: str) -> dict[str, Any]:
               "latent_dim": getattr(args, "latent_dim", None), "control_points": getattr(args, "control_points", None),
               "hessian": getattr(args, "hessian", None)}
     return {k: values[k] for k in names if values[k] is not None}
-
-
-def cmd_learn(args: argparse.Namespace) -> int:
-    from latentoc.cli.learn import learn_file
-
-    if args.stride < 1 or args.latent_dim < 1:
-        raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
-    check_out_dir(args.out)
-    _, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
-                                plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
-                                start=args.start, stop=args.stop, fps=args.fps,
-                                fixed_pose={n: v for n, v in args.hold if v is not None},
-                                locked=[n for n, v in args.hold if v is None])
-    s = json.loads(next(p for p in paths if p.name == "learn.json").read_text())  # learned.summary(), as written
-    demo = s["demonstration"]
-    print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
-          f"{len(demo['joints'])} joints" + (f", {len(demo['locked_joints'])} locked" if demo["locked_joints"] else "")
-          + (", resampled" if demo["resampled"] else "") + (f", clipped {demo['clipped']}" if demo["clipped"] else ""))
-    report = s["learning"]
-    ended = "" if report is None else " (converged)" if report["converged"] else f" (not converged: {report['message']})"
-    print(f"  GPDM d = {s['latent_dim']} on {s['learned_frames']} frames in {s['learning_time_s']:.2f} s{ended}")
-    print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
-          f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
-    print("  per joint: " + ", ".join(f"{name} {e:.3g}" for name, e in s["reconstruction_rmse_per_joint"].items()))
-    print("  wrote " + ", ".join(str(p) for p in paths))
-    return 0
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
@@ -265,7 +239,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_start_poses(args: argparse.Namespace) -> int:
     from latentoc.problem.toml_files import load_problem
-    from latentoc.results import write_json
+    from latentoc.runtime.files import write_json
     from latentoc.robots import load_robot
     from latentoc.latent.tube import tube_delta
     from latentoc.min_torque.start_poses import start_pose_distances
@@ -299,7 +273,7 @@ def cmd_start_poses(args: argparse.Namespace) -> int:
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from latentoc.reproduce.paper import report, reproduce
-    from latentoc.results import atomic_write
+    from latentoc.runtime.files import atomic_write
 
     if args.figures:
         from latentoc.reproduce.figures import make_figures

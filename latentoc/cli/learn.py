@@ -11,9 +11,12 @@ and writes into one folder, only after everything has been computed (a bad input
 * with ``plots``: ``latent_tube.png`` (the training path in the tube at tube_training),
   ``reconstruction.png`` (the motion and the GP mean) and ``variance.png`` (sigma^2 along the
   training path against time, with tube_training).
+
+:func:`cmd_learn` is the command itself; :func:`load_gpdm_file` reads the model back (``solve --gpdm``).
 """
 from __future__ import annotations
 
+import argparse
 import io
 import json
 import tempfile
@@ -25,7 +28,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from latentoc.runtime.files import NPZ_ERRORS, dumps_json
+from latentoc.errors import LatentocError
+from latentoc.runtime.files import NPZ_ERRORS, check_out_dir, dumps_json
 from latentoc.runtime.interrupts import finish
 from latentoc.gpdm import GPDM, GPDMInputError, GPDMSettings, learn_gpdm
 from latentoc.motions import Demonstration, check_frames, demonstration_from_file
@@ -36,7 +40,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = ["LearnedMotion", "learn_motion", "learn_file", "figures", "robot_from_argument", "load_gpdm_file",
-           "LEARN_NAME"]
+           "LEARN_NAME", "cmd_learn"]
 
 LEARN_NAME = "learn.json"
 
@@ -166,3 +170,28 @@ def load_gpdm_file(path: str | Path) -> GPDM:
         return GPDM.load(path)
     except NPZ_ERRORS as exc:
         raise GPDMInputError(f"{path} is not a GPDM written by latentoc ({type(exc).__name__}: {exc})") from None
+
+
+def cmd_learn(args: argparse.Namespace) -> int:
+    """``python -m latentoc learn``: :func:`learn_file` with the command line's arguments, and what it learned."""
+    if args.stride < 1 or args.latent_dim < 1:
+        raise LatentocError(f"--stride and --latent-dim must be positive, got {args.stride} and {args.latent_dim}")
+    check_out_dir(args.out)
+    _, paths = learn_file(args.file, args.robot, args.out, latent_dim=args.latent_dim, stride=args.stride,
+                          plots=args.plots, clip_to_limits=args.clip, rate=args.rate, asf=args.asf,
+                          start=args.start, stop=args.stop, fps=args.fps,
+                          fixed_pose={n: v for n, v in args.hold if v is not None},
+                          locked=[n for n, v in args.hold if v is None])
+    s = json.loads(next(p for p in paths if p.name == "learn.json").read_text())  # learned.summary(), as written
+    demo = s["demonstration"]
+    print(f"{args.file}: {demo['frames']} frames at {demo['rate_hz']:.4g} Hz ({demo['duration_s']:.3g} s) of "
+          f"{len(demo['joints'])} joints" + (f", {len(demo['locked_joints'])} locked" if demo["locked_joints"] else "")
+          + (", resampled" if demo["resampled"] else "") + (f", clipped {demo['clipped']}" if demo["clipped"] else ""))
+    report = s["learning"]
+    ended = "" if report is None else " (converged)" if report["converged"] else f" (not converged: {report['message']})"
+    print(f"  GPDM d = {s['latent_dim']} on {s['learned_frames']} frames in {s['learning_time_s']:.2f} s{ended}")
+    print(f"  reconstruction RMS error {s['reconstruction_rmse']:.3g} (rad or m), "
+          f"tube_training (Eq. 30) {s['tube_training']:.4g}, noise variance {s['noise_variance']:.3g}")
+    print("  per joint: " + ", ".join(f"{name} {e:.3g}" for name, e in s["reconstruction_rmse_per_joint"].items()))
+    print("  wrote " + ", ".join(str(p) for p in paths))
+    return 0

@@ -217,8 +217,9 @@ _ARGUMENTS = (_solve_arguments, _learn_arguments, _plot_arguments, _view_argumen
 
 #: command name -> its implementation, "module:function" (:mod:`latentoc.cli.commands`)
 COMMANDS = {name: f"latentoc.cli.commands:cmd_{name.replace('-', '_')}"
-            for name in ("plot", "view", "notebooks", "list", "show", "learn", "solve", "sweep", "reproduce",
-                         "start-poses", "bench", "retarget")} | {"simulate": "latentoc.simulate.command:cmd_simulate"}
+            for name in ("plot", "view", "notebooks", "list", "show", "solve", "sweep", "reproduce",
+                         "start-poses", "bench", "retarget")} | {"learn": "latentoc.cli.learn:cmd_learn",
+                                                                 "simulate": "latentoc.simulate.command:cmd_simulate"}
 
 
 def _command(args: argparse.Namespace) -> Callable[[argparse.Namespace], int]:

@@ -11,7 +11,8 @@
 * :func:`check_out_dir`: ``--out`` must be a folder (or not exist yet) that can be written,
   checked before any work.
 * :func:`dumps_json`: strict JSON (no ``NaN``/``Infinity`` tokens): a non-finite float is the
-  string ``"NaN"``, ``"Infinity"`` or ``"-Infinity"``, read back by :func:`json_number`.
+  string ``"NaN"``, ``"Infinity"`` or ``"-Infinity"``, read back by :func:`json_number`;
+  :func:`write_json` writes it atomically.
 """
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ import numpy as np
 
 from latentoc.errors import LatentocError
 
-__all__ = ["OutputError", "NPZ_ERRORS", "atomic_write", "write_folder", "check_out_dir", "exclusive_lock", "dumps_json",
+__all__ = ["OutputError", "NPZ_ERRORS", "atomic_write", "write_folder", "check_out_dir", "exclusive_lock", "dumps_json", "write_json",
            "plain", "json_number", "sha256", "NON_FINITE"]
 
 #: what reading a damaged, truncated, empty or foreign .npz raises (numpy, zipfile, json)
@@ -214,6 +215,11 @@ def plain(value: Any) -> Any:
 def dumps_json(data: Any) -> str:
     """Strict, indented JSON of ``data`` (module doc)."""
     return json.dumps(plain(data), indent=2, allow_nan=False) + "\n"
+
+
+def write_json(path: Path, data: Any) -> None:
+    """Atomically write ``data`` as indented, strict JSON."""
+    atomic_write(Path(path), lambda f: f.write(dumps_json(data)))
 
 
 def json_number(value: Any) -> float:

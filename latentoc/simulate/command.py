@@ -23,8 +23,8 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.errors import LatentocError, ResultFileError, SimulationError
-from latentoc.runtime.files import atomic_write, check_out_dir
-from latentoc.results import load_result, write_json
+from latentoc.runtime.files import atomic_write, check_out_dir, write_json
+from latentoc.results import load_result
 from latentoc.simulate.mjcf import SOLIMP, SOLREF
 
 if TYPE_CHECKING:
