@@ -25,9 +25,8 @@ from latentoc.jump.transcription.nlp import JumpNLP
 from latentoc.jump.schedule.phases import Phases
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.transcription.selection import POLYGON_EDGES, Selection
-from latentoc.jump.settings import JumpSettings
 
-__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "with_samples", "NEIGHBOUR", "SPACING", "EXCHANGE_ROUNDS"]
+__all__ = ["Margins", "SEED", "NEAR", "TOLERANCE", "clearance", "violations", "violated", "chosen_rows", "seed_selection", "grown_selection", "NEIGHBOUR", "SPACING", "EXCHANGE_ROUNDS"]
 
 NEIGHBOUR = 0.002  # s: either side of a short stretch's worst time (a bound moves a little)
 SPACING = 0.005  # s between the samples along a stretch that comes near
@@ -122,11 +121,10 @@ def _node_rows(nlp: JumpNLP, w: np.ndarray, robot: JumpRobot, phases: Phases, m:
 
 
 def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
-                robot: JumpRobot, phases: Phases, s: JumpSettings, m: Margins) -> Selection:
+                robot: JumpRobot, phases: Phases, delta: float, m: Margins) -> Selection:
     """The rows within the margins ``m`` of binding at ``w`` (module doc): the contact nodes' own
     rows, and samples at the worst 1 kHz time of each stretch that comes that near; ``place``: the
-    unloaded points' clearance (:func:`clearance`)."""
-    delta = s.tube
+    unloaded points' clearance (:func:`clearance`); ``delta``: the tube's."""
     t = np.asarray(traj["t"])
     contact = np.asarray(traj["contact"]).astype(bool)
     inside = (t > 0) & (t < phases.duration)
@@ -163,17 +161,26 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
 
 
 def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
-                   robot: JumpRobot, phases: Phases, s: JumpSettings, tube: np.ndarray) -> Selection:
-    """A phase's first selection: the rows within :data:`SEED` of binding at its start ``w``, and
-    the tube at ``tube``."""
-    seed = chosen_rows(nlp, w, traj, sr, place, robot, phases, s, SEED)
-    return seed.merged(Selection.empty(seed.node_torque.shape[0], seed.n_joints, tube))
+                   robot: JumpRobot, phases: Phases, delta: float) -> Selection:
+    """Phase 1's selection from the full transcription ``nlp`` (every node row, the tube) at its start
+    ``w``: every node row and the tube, and the flight samples within :data:`SEED` of binding there
+    (no contact samples)."""
+    nodes = nlp.selection
+    seed = chosen_rows(nlp, w, traj, sr, place, robot, phases, delta, SEED)
+    seed = seed.merged(Selection.empty(seed.node_torque.shape[0], seed.n_joints, nodes.tube))
+    return nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
+                                  seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
 
 
-def with_samples(selection: Selection, contact: np.ndarray, flight: np.ndarray) -> Selection:
-    """``selection`` with contact samples at ``contact`` and flight samples at ``flight``, each with
-    every torque row (and the contact samples every polygon row that applies)."""
-    nj, npoly = selection.n_joints, 2 * POLYGON_EDGES
-    return selection.merged(Selection(np.zeros_like(selection.node_torque), np.zeros_like(selection.node_polygon),
-                                      contact, np.ones((len(contact), nj)), np.ones((len(contact), npoly)),
-                                      flight, np.ones((len(flight), nj)), np.zeros(0)))
+def grown_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
+                    robot: JumpRobot, phases: Phases, delta: float) -> tuple[Selection | None, dict[str, float]]:
+    """After a solve of ``nlp`` to ``w``: the worst violation of each kind on the 1 kHz grid
+    (:func:`violations`) and, where one is violated, ``nlp``'s selection with the rows within
+    :data:`NEAR` of binding (:func:`chosen_rows`); None where nothing is violated or nothing new
+    is added (the rows hold to Ipopt's tolerance)."""
+    worst = violations(sr, traj, delta, robot.weight, place)
+    if not violated(worst):
+        return None, worst
+    more = nlp.selection.merged(chosen_rows(nlp, w, traj, sr, place, robot, phases, delta, NEAR))
+    grown = more.rows() > nlp.selection.rows() or len(more.contact) > len(nlp.selection.contact)
+    return (more if grown else None), worst

@@ -22,7 +22,7 @@ from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.exchange_rounds import Exchange, exchange_rounds
 from latentoc.jump.solve import exchange
 from latentoc.jump.check.export import trajectory
-from latentoc.jump.transcription.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid, tube_times
+from latentoc.jump.transcription.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid
 from latentoc.jump.schedule.phases import Phases
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.transcription.selection import Selection
@@ -90,7 +90,6 @@ class _Solve:
         self.robot, self.layer, self.blocks, self.ph, self.s = robot, layer, blocks, phases, settings
         self.start, self.model, self.clock = start, model, _Clock()
         self.opts = ipopt_options(settings, verbose)
-        self.tube = tube_times(settings, phases, layer)
         self.t0 = time.perf_counter()
         self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
         self.consistent: dict = {}  # the consistent start's residuals (:mod:`.consistent_path`)
@@ -98,7 +97,7 @@ class _Solve:
     def lap(self, part: str) -> None:
         self.t0 = self.clock.add(part, self.t0)
 
-    def build(self, objective: str, selection: Selection) -> JumpNLP:
+    def build(self, objective: str, selection: Selection | None = None) -> JumpNLP:
         nlp = build_nlp(self.robot, self.layer, self.blocks, self.ph, self.s, self.start["P"], objective, selection,
                         self.start.get("P_range"))
         self.lap("build_s")
@@ -125,8 +124,7 @@ class _Solve:
         nodes (Ipopt takes 3x the iterations with only those near binding) and the flight samples
         near binding at the start."""
         s, st = self.s, self.start
-        full = self.build("feasibility", Selection.every_node_row(s.n_stance + s.n_land, self.robot.unmirrored.size,
-                                                                  self.tube))
+        full = self.build("feasibility")  # every node row and the tube: build_nlp's default selection
         P, x_L = st["P"], st["x_L"]
         if self.layer.has_tube:  # the latent path moved least so that its contacts are physical
             base = full.spline.fit(st["t"], st["base"])
@@ -136,11 +134,7 @@ class _Solve:
         x = initial_point(self.robot, self.layer, full, self.ph, P, x_L)
         self.lap("build_s")
         traj, sr, place = self.check(full, x)
-        seed = exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph, s, self.tube)
-        nodes = full.selection
-        first = nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
-                                       seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
-        nlp1 = self.build("feasibility", first)
+        nlp1 = self.build("feasibility", exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph, s.tube))
         x1, _ = carried_point(full, nlp1, x)
         run1 = self.run_ipopt(nlp1, x1, None, "phase 1 (feasible)")
         return nlp1, run1.x, run1
@@ -151,7 +145,7 @@ class _Solve:
         every row on the packaged grids (rows only where they are near binding at the start took 2-3x
         the iterations in the later rounds), then the rows the 1 kHz checks add."""
         s, ph = self.s, self.ph
-        selection = exchange.with_samples(nlp_start.selection, contact_sample_grid(s, ph), flight_sample_grid(s, ph))
+        selection = nlp_start.selection.with_samples(contact_sample_grid(s, ph), flight_sample_grid(s, ph))
         nlp2 = self.build("distance", selection)
         x, lam_x = carried_point(nlp_start, nlp2, x_start, warm.get("lam_x0") if warm else None)
         start: dict = {"x0": x}
@@ -161,13 +155,7 @@ class _Solve:
 
         def check(nlp: JumpNLP, run: ipopt.IpoptResult) -> tuple[Selection | None, dict[str, float]]:
             traj, sr, place = self.check(nlp, run.x)
-            worst = exchange.violations(sr, traj, s.tube, self.robot.weight, place)
-            if not exchange.violated(worst):
-                return None, worst
-            more = nlp.selection.merged(exchange.chosen_rows(nlp, run.x, traj, sr, place, self.robot, ph, s,
-                                                             exchange.NEAR))
-            grown = more.rows() > nlp.selection.rows() or len(more.contact) > len(nlp.selection.contact)
-            return (more if grown else None), worst  # nothing new: the rows hold to Ipopt's tolerance
+            return exchange.grown_selection(nlp, run.x, traj, sr, place, self.robot, ph, s.tube)
 
         def resume(old: JumpNLP, new: JumpNLP, run: ipopt.IpoptResult) -> dict:
             x, lam_x = carried_point(old, new, run.x, run.lam_x)

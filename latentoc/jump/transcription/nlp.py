@@ -159,7 +159,7 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
         wire(w)
     nlp = SparseNLP(var.n, w.families, _objective(var, P_fixed, objective))
     names, times, comps = np.array(w.names), np.array(w.times, float), np.array(w.comps, np.int64)
-    lbg, ubg = _row_bounds(names, comps, times, robot, s, ph)
+    lbg, ubg = _row_bounds(names, comps, robot)
     lbx, ubx = _variable_bounds(var, ph, tc, sel.contact)
     if P_range is not None:  # the free control points within +-P_range of P_fixed's (joint range)
         P0 = np.asarray(P_fixed, float)[1:-1]
@@ -181,8 +181,7 @@ def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Fu
     return ca.Function("jump_objective", [w], [f])
 
 
-def _row_bounds(names: np.ndarray, comps: np.ndarray, times: np.ndarray, robot: JumpRobot, s: JumpSettings,
-                ph: Phases) -> tuple[np.ndarray, np.ndarray]:
+def _row_bounds(names: np.ndarray, comps: np.ndarray, robot: JumpRobot) -> tuple[np.ndarray, np.ndarray]:
     bounds = {"dynamics": (0, 0), "flight_base": (0, 0), "flight_pitch": (0, 0), "height": (0, np.inf),
               "zmp_polygon": (-np.inf, 0), "com_polygon": (-np.inf, 0), "takeoff": (0, 0), "closure_gap": (0, 0),
               "pitch_integration": (0, 0), "flight_clearance": (0, np.inf), "touchdown_position": (0, 0),

@@ -77,6 +77,14 @@ class Selection:
         return Selection(self.node_torque | other.node_torque, self.node_polygon | other.node_polygon,
                          contact, ct, cp, flight, ft, np.union1d(_key(self.tube), _key(other.tube)))
 
+    def with_samples(self, contact: np.ndarray, flight: np.ndarray) -> "Selection":
+        """This selection with contact samples at ``contact`` and flight samples at ``flight``, each with
+        every torque row (and the contact samples every polygon row that applies)."""
+        nj, npoly = self.n_joints, 2 * POLYGON_EDGES
+        return self.merged(Selection(np.zeros_like(self.node_torque), np.zeros_like(self.node_polygon),
+                                     contact, np.ones((len(contact), nj)), np.ones((len(contact), npoly)),
+                                     flight, np.ones((len(flight), nj)), np.zeros(0)))
+
     def rows(self) -> int:
         """Chosen torque and polygon rows, and samples' rows of the tube."""
         return int(self.node_torque.sum() + self.node_polygon.sum() + self.contact_torque.sum()
