@@ -1,15 +1,17 @@
-"""GPDM learning benchmark (issue 28): each target of the issue in a fresh process, its learning time, peak
-memory and Eq. 16, with the machine it ran on.
+"""GPDM learning benchmark (issues 28 and 52): each case in a fresh process, its learning time, peak memory,
+Eq. 16, Newton iterations and convergence, with the machine it ran on.
 
-* synthetic N = 350, D = 37, d = 3: <= 10 s, converged;
-* the panda example at stride 1 from the CLI (examples/panda-reach/reach.csv, 251 x 7): <= 5 s wall,
+* the motions of :mod:`latentoc.benchmarks.gpdm_motions`, each N = 350, D = 37, d = 3 (the synthetic set,
+  the CMU jump, the panda reach, a noisy curve with loops, a slow random walk): <= 3 s, converged;
+* the panda example at stride 1 from the CLI (examples/panda-reach/reach.csv, 251 x 7): <= 2 s wall,
   ``/usr/bin/time -v python -m latentoc learn ... --robot panda --hold ...`` (the README's command);
 * the broad jump's training set (157 x 37): <= 10 s, and the minimum of the shipped model;
-* synthetic N = 1000, D = 37: <= 2 min and <= 2 GB peak.
+* synthetic N = 1000, D = 37: <= 2 min and <= 2 GB peak (left out by ``--quick``).
 
 ``--scaling``: time and peak memory for N = 350, 1000, 2000 (D = 37), docs/gpdm.md's table.
-``--split``: N = 350's learning time level by level (evaluations, Hessians, eigendecompositions).
-Run: ``python -m latentoc bench gpdm [--scaling | --split] [--quick]``.
+``--split [MOTION]``: each motion's (or one's) learning time level by level (evaluations, Hessians,
+eigendecompositions).
+Run: ``python -m latentoc bench gpdm [--scaling | --split [MOTION]] [--quick]``.
 """
 
 from __future__ import annotations
@@ -27,21 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-PANDA = ROOT / "examples" / "panda-reach" / "reach.csv"
+from latentoc.benchmarks.gpdm_motions import MOTIONS, PANDA, benchmark_motion, synthetic_motion
 
-
-def synthetic_motion(N: int, D: int, seed: int = 0, cycles: float = 2.0,
-                     noise: float = 0.01) -> np.ndarray:
-    """Smooth periodic 'joint angle' data: each column a random mix of the
-    first three harmonics of a phase running over ``cycles`` periods, plus
-    small white noise (fixed seed)."""
-    rng = np.random.default_rng(seed)
-    phase = np.linspace(0.0, 2.0 * np.pi * cycles, N)
-    H = np.stack([f(k * phase) for k in (1, 2, 3) for f in (np.sin, np.cos)], axis=1)
-    H = H / np.array([1, 1, 2, 2, 3, 3])
-    M = rng.standard_normal((H.shape[1], D))
-    return H @ M + rng.standard_normal(D) + noise * rng.standard_normal((N, D))
+__all__ = ["main", "synthetic_motion"]
 
 
 def machine() -> str:
@@ -59,26 +49,33 @@ def machine() -> str:
             f"Python {platform.python_version()}")
 
 
+def _data(case: str) -> np.ndarray:
+    """A case's training data: a motion of gpdm_motions by name, the broad jump's training set ("jump157") or
+    the synthetic set of N x D frames ("NxD")."""
+    if case in MOTIONS:
+        return benchmark_motion(case)
+    if case == "jump157":
+        from latentoc.jump.demonstration.training import training_jumps
+
+        return training_jumps(0)[0].Y
+    N, D = (int(x) for x in case.split("x"))
+    return synthetic_motion(N, D)
+
+
 def _child(case: str) -> dict:
     """One case, learned in this process: its data, learning time and model."""
     from latentoc.gpdm import GPDMSettings, learn_gpdm
     from latentoc.runtime.progress import set_quiet
 
     set_quiet(True)
-    if case == "jump":
-        from latentoc.jump.demonstration.training import training_jumps
-
-        Y = training_jumps(0)[0].Y
-    else:
-        N, D = (int(x) for x in case.split("x"))
-        Y = synthetic_motion(N, D)
+    Y = _data(case)
     t0 = time.perf_counter()
     m = learn_gpdm(Y, GPDMSettings())
     out = {"case": case, "shape": list(Y.shape), "time_s": time.perf_counter() - t0,
            "objective": m.objective_value, "iterations": m.learning.iterations,
            "evaluations": m.learning.evaluations, "decrement": m.learning.newton_decrement,
            "converged": m.learning.converged}
-    if case == "jump":
+    if case == "jump157":
         out.update(_against_shipped(Y, m))
     return out
 
@@ -113,8 +110,7 @@ def _split(case: str) -> list[dict]:
         return r
 
     learning.minimize_newton, np.linalg.eigh = level, timer(eigh, "eigh_s")  # type: ignore[assignment]
-    N, D = (int(x) for x in case.split("x"))
-    learning.learn_gpdm(synthetic_motion(N, D), GPDMSettings())
+    learning.learn_gpdm(_data(case), GPDMSettings())
     return sorted(levels, key=lambda lv: lv["variables"])
 
 
@@ -175,9 +171,21 @@ def _row(label: str, r: dict, limit_s: float | None, limit_gb: float | None, wal
     ok = r["converged"] and (limit_s is None or t <= limit_s) and (limit_gb is None or r["peak_rss"] <= limit_gb * 1e9)
     target = " and ".join(x for x in (f"<= {limit_s:g} s" if limit_s else "", f"<= {limit_gb:g} GB" if limit_gb else "")
                           if x)
+    load = os.getloadavg()[0]
     return (f"{label:<34} {r['shape'][0]:>5} x {r['shape'][1]:<3} {t:8.2f} {r['peak_rss'] / 1e9:7.2f} "
             f"{r['iterations']:>5} {r['objective']:>17.9f} {str(r['converged']):>6}  {target or '-':<18} "
-            f"{'met' if ok else 'MISSED'}")
+            f"{'met' if ok else 'MISSED':<6} {load:5.2f}")
+
+
+def _print_split(case: str) -> None:
+    _, _, out = _run([sys.executable, "-m", "latentoc.benchmarks.gpdm_bench", "--child", f"split:{case}"])
+    levels = json.loads(out.strip().splitlines()[-1])
+    print(f"{case}: {sum(lv['wall_s'] for lv in levels):.2f} s in all (load average {os.getloadavg()[0]:.2f})")
+    for lv in levels:
+        rest = lv["wall_s"] - lv["evaluate_s"] - lv["hessian_s"] - lv["eigh_s"]
+        print(f"  {lv['variables']:5d} variables: {lv['wall_s']:.2f} s, {lv['iterations']} iterations; "
+              f"{lv['evaluations']} evaluations {lv['evaluate_s']:.2f} s, Hessians {lv['hessian_s']:.2f} s, "
+              f"eigendecompositions {lv['eigh_s']:.2f} s, the rest {rest:.2f} s", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -185,7 +193,8 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="gpdm_bench", description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--scaling", action="store_true", help="time and memory for N = 350, 1000, 2000 (D = 37)")
     p.add_argument("--quick", action="store_true", help="leave out N = 1000")
-    p.add_argument("--split", action="store_true", help="where N = 350's learning time goes, level by level")
+    p.add_argument("--split", nargs="?", const="all", default=None, choices=["all", *MOTIONS],
+                   help="where each motion's (or one motion's) learning time goes, level by level")
     p.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.child is not None:
@@ -193,25 +202,22 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(out), flush=True)
         return 0
     if args.split:
-        _, _, out = _run([sys.executable, "-m", "latentoc.benchmarks.gpdm_bench", "--child", "split:350x37"])
-        print(f"N = 350, D = 37, by level (machine: {machine()})")
-        for lv in json.loads(out.strip().splitlines()[-1]):
-            rest = lv["wall_s"] - lv["evaluate_s"] - lv["hessian_s"] - lv["eigh_s"]
-            print(f"  {lv['variables']:5d} variables: {lv['wall_s']:.2f} s, {lv['iterations']} iterations; "
-                  f"{lv['evaluations']} evaluations {lv['evaluate_s']:.2f} s, Hessians {lv['hessian_s']:.2f} s, "
-                  f"eigendecompositions {lv['eigh_s']:.2f} s, the rest {rest:.2f} s")
+        print(f"learning time by level, coarse to fine (machine: {machine()})")
+        for case in (MOTIONS if args.split == "all" else [args.split]):
+            _print_split(case)
         return 0
     print("GPDM learning benchmark (d = 3, balanced, converged to the Newton decrement <= 1e-10 |L|, 1 BLAS thread)")
     print(f"machine: {machine()}")
     print(f"{'case':<34} {'N x D':>11} {'time s':>8} {'peak GB':>7} {'its':>5} {'Eq. 16':>17} {'conv.':>6}  "
-          f"{'target':<18} result")
+          f"{'target':<18} {'result':<6} {'load':>5}")
     if args.scaling:
         for N in (350, 1000, 2000):
             print(_row(f"synthetic N = {N}", learn_case(f"{N}x37"), None, None), flush=True)
     else:
-        print(_row("synthetic (learning time)", learn_case("350x37"), 10, None), flush=True)
-        print(_row("panda example, CLI (wall, time -v)", panda_cli(), 5, None, wall=True), flush=True)
-        jump = learn_case("jump")
+        for name in MOTIONS:
+            print(_row(f"{name} (learning time)", learn_case(name), 3, None), flush=True)
+        print(_row("panda example, CLI (wall, time -v)", panda_cli(), 2, None, wall=True), flush=True)
+        jump = learn_case("jump157")
         print(_row("broad jump's training set", jump, 10, None), flush=True)
         if jump.get("shipped"):
             print(f"  the shipped model {jump['shipped']}: Eq. 16 {jump['shipped_objective']:.9f}, relative "
