@@ -9,8 +9,8 @@ Eq. 16, Newton iterations and convergence, with the machine it ran on.
 * synthetic N = 1000, D = 37: <= 2 min and <= 2 GB peak (left out by ``--quick``).
 
 ``--scaling``: time and peak memory for N = 350, 1000, 2000 (D = 37), docs/gpdm.md's table.
-``--split [MOTION]``: each motion's (or one's) learning time level by level (evaluations, Hessians, their
-Cholesky factors, the conjugate-gradient steps).
+``--split [MOTION]``: each motion's (or one's) learning time level by level (evaluations, Hessians,
+eigendecompositions).
 Run: ``python -m latentoc bench gpdm [--scaling | --split [MOTION]] [--quick]``.
 """
 
@@ -82,16 +82,15 @@ def _child(case: str) -> dict:
 
 def _split(case: str) -> list[dict]:
     """One learning run timed level by level (coarse to fine): L and its gradient, the Hessian's
-    assembly, its Cholesky factorisations, the conjugate-gradient steps and the rest, from timers put
-    around the Newton method's calls in this (child) process."""
+    assembly, its eigendecomposition and the rest, from timers put around the Newton method's calls
+    in this (child) process."""
     import latentoc.gpdm.learning as learning
-    import latentoc.gpdm.newton as newton
     from latentoc.gpdm import GPDMSettings
     from latentoc.runtime.progress import set_quiet
 
     set_quiet(True)
     levels: list[dict] = []
-    minimize = learning.minimize_newton
+    newton, eigh = learning.minimize_newton, np.linalg.eigh
 
     def timer(fn, key):  # type: ignore[no-untyped-def]
         def call(*a, **k):  # type: ignore[no-untyped-def]
@@ -104,16 +103,13 @@ def _split(case: str) -> list[dict]:
         return call
 
     def level(evaluate, hessian, z0, *a, **k):  # type: ignore[no-untyped-def]
-        levels.append({"variables": int(np.size(z0)), "evaluate_s": 0.0, "hessian_s": 0.0, "factor_s": 0.0,
-                       "cg_s": 0.0})
+        levels.append({"variables": int(np.size(z0)), "evaluate_s": 0.0, "hessian_s": 0.0, "eigh_s": 0.0})
         t0 = time.perf_counter()
-        r = minimize(timer(evaluate, "evaluate_s"), timer(hessian, "hessian_s"), z0, *a, **k)
+        r = newton(timer(evaluate, "evaluate_s"), timer(hessian, "hessian_s"), z0, *a, **k)
         levels[-1].update(wall_s=time.perf_counter() - t0, iterations=r.steps, evaluations=r.evaluations)
         return r
 
-    learning.minimize_newton = level  # type: ignore[assignment]
-    newton.factor_shifted = timer(newton.factor_shifted, "factor_s")  # type: ignore[assignment]
-    newton.steihaug = timer(newton.steihaug, "cg_s")  # type: ignore[assignment]
+    learning.minimize_newton, np.linalg.eigh = level, timer(eigh, "eigh_s")  # type: ignore[assignment]
     learning.learn_gpdm(_data(case), GPDMSettings())
     return sorted(levels, key=lambda lv: lv["variables"])
 
@@ -186,11 +182,10 @@ def _print_split(case: str) -> None:
     levels = json.loads(out.strip().splitlines()[-1])
     print(f"{case}: {sum(lv['wall_s'] for lv in levels):.2f} s in all (load average {os.getloadavg()[0]:.2f})")
     for lv in levels:
-        rest = lv["wall_s"] - lv["evaluate_s"] - lv["hessian_s"] - lv["factor_s"] - lv["cg_s"]
-        print(f"  {lv['variables']:5d} variables: {lv['wall_s']:.2f} s, {lv['iterations'] + 1} Hessians; "
+        rest = lv["wall_s"] - lv["evaluate_s"] - lv["hessian_s"] - lv["eigh_s"]
+        print(f"  {lv['variables']:5d} variables: {lv['wall_s']:.2f} s, {lv['iterations']} iterations; "
               f"{lv['evaluations']} evaluations {lv['evaluate_s']:.2f} s, Hessians {lv['hessian_s']:.2f} s, "
-              f"Cholesky factors {lv['factor_s']:.2f} s, CG steps {lv['cg_s']:.2f} s, the rest {rest:.2f} s",
-              flush=True)
+              f"eigendecompositions {lv['eigh_s']:.2f} s, the rest {rest:.2f} s", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,12 +21,11 @@ Procedure (:func:`learn_gpdm`):
 2. X from PCA (scores scaled so that the first latent coordinate has unit standard
    deviation), alpha = (0.9, 1, 0.1, e), beta = (1, 1, e); above 200 frames, the model of every
    second frame instead, its latent points interpolated (:mod:`latentoc.gpdm.start`).
-3. W profiled out in closed form (:mod:`latentoc.gpdm.objective`); a trust-region Newton method
-   (:mod:`latentoc.gpdm.newton`) on X and the free log-hyperparameters with the exact gradient and
-   Hessian (:mod:`latentoc.gpdm.hessian`), the latent rotations (an exact symmetry of Eq. 16)
-   projected out (:func:`latent_rotations`), until the Hessian has no negative curvature and the
-   Newton decrement (the decrease of L a Newton step predicts) is at most ``ftol`` |L|. Reaching
-   ``max_iterations``, or a hyperparameter on ``log_hyper_bound``, is reported as not converged
+3. W profiled out in closed form (:mod:`latentoc.gpdm.objective`); a damped saddle-free Newton
+   method (:mod:`latentoc.gpdm.newton`) on X and the free log-hyperparameters with the exact
+   gradient and Hessian (:mod:`latentoc.gpdm.hessian`), until the Newton decrement (the decrease
+   of L a Newton step predicts) is at most ``ftol`` |L|. Reaching ``max_iterations``, or a
+   hyperparameter on ``log_hyper_bound``, is reported as not converged
    (:class:`~latentoc.gpdm.model.LearningReport`).
 
 Balanced GPDM (Urtasun et al. 2006): the dynamics term times lambda = D/d (``balanced=True``).
@@ -51,7 +50,7 @@ from latentoc.gpdm.learning_settings import GPDMInputError, GPDMSettings, check_
 from latentoc.gpdm.size import check_size
 from latentoc.gpdm.start import COARSE_ABOVE, COARSE_DOWN_TO, coarse_frames, initial_variables, interpolated_start
 
-__all__ = ["latent_rotations", "learn_gpdm", "learning_problem", "prepare_data", "roughness"]
+__all__ = ["learn_gpdm", "learning_problem", "prepare_data", "roughness"]
 
 
 def prepare_data(Y: np.ndarray | Sequence[np.ndarray], latent_dim: int) -> tuple[np.ndarray, list[int]]:
@@ -128,24 +127,6 @@ def learning_problem(Yc: np.ndarray, lengths: list[int], settings: GPDMSettings)
                        prior_shape=shape, prior_rate=rate, kappa_sq=settings.kappa_sq)
 
 
-def latent_rotations(z: np.ndarray, N: int, d: int) -> np.ndarray:
-    """An orthonormal basis of the directions the latent rotations move the variables ``z`` along (X row
-    major first, the hyperparameters after it, untouched): X Omega for the d(d - 1)/2 generators Omega of
-    the rotations, minus those the points make dependent (all points on a line leave one rotation acting
-    as another). Eq. 16 is invariant under X -> X R (R orthogonal): its kernels see distances and inner
-    products, the first points' prior their norms."""
-    X = z[:N * d].reshape(N, d)
-    T = np.zeros((z.size, d * (d - 1) // 2))
-    for k, (a, b) in enumerate((a, b) for a in range(d) for b in range(a + 1, d)):
-        t = np.zeros((N, d))
-        t[:, a], t[:, b] = X[:, b], -X[:, a]
-        T[:N * d, k] = t.ravel()
-    if T.shape[1] == 0:
-        return T
-    U, sv, _ = np.linalg.svd(T, full_matrices=False)
-    return U[:, sv > 1e-8 * sv[0]] if sv[0] > 0 else U[:, :0]
-
-
 @dataclass
 class _FreePoint:
     """An evaluation of Eq. 16 seen on the learned variables (:func:`learn_gpdm`)."""
@@ -218,8 +199,7 @@ def _learn(Y: np.ndarray | Sequence[np.ndarray], settings: GPDMSettings, coarse_
             progress.set_postfix_str(f"L = {f:.10g}, decrement {decrement:.2g}")  # each iteration shown
 
         res = minimize_newton(evaluate_free, hessian_free, v0[free], lower, -lower,  # type: ignore[arg-type]
-                              settings.ftol, settings.max_iterations, report_step,
-                              symmetries=lambda z: latent_rotations(z, N, d))
+                              settings.ftol, settings.max_iterations, report_step)
     z, f, g, converged, decrement = res.z, res.f, res.g, res.converged, res.decrement
     message = res.message + origin
     gnorm = float(np.max(np.abs(g)))
