@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["MOTIONS", "PANDA", "benchmark_motion", "resampled", "synthetic_motion"]
+__all__ = ["MINIMA", "MOTIONS", "PANDA", "benchmark_motion", "resampled", "same_minimum", "synthetic_motion"]
 
 ROOT = Path(__file__).resolve().parents[2]
 PANDA = ROOT / "examples" / "panda-reach" / "reach.csv"
@@ -92,6 +92,18 @@ def _walk() -> np.ndarray:
 #: the benchmark's motions by name (module doc), each N x D
 MOTIONS: dict[str, Callable[[], np.ndarray]] = {
     "synthetic": lambda: synthetic_motion(N, D), "jump": _jump, "panda": _panda, "loops": _loops, "walk": _walk}
+
+
+#: Eq. 16 where the saddle-free learner ends on each motion (commit f403ce1; numpy 2.4.6, scipy 1.17.1, one BLAS
+#: thread): a faster learner has to end in the same minimum (issue 52), :func:`same_minimum`
+MINIMA = {"synthetic": -128052.931856500, "jump": -185778.536748996, "panda": -179544.038854470,
+          "loops": -109894.254462249, "walk": -115610.586224990}
+
+
+def same_minimum(value: float, reference: float, ftol: float = 1e-10) -> bool:
+    """Whether Eq. 16 = ``value`` is the ``reference`` minimum to the learner's tolerance, ftol max(|L|, 1)
+    (:class:`~latentoc.gpdm.GPDMSettings`)."""
+    return abs(value - reference) <= ftol * max(abs(reference), 1.0)
 
 
 def benchmark_motion(name: str) -> np.ndarray:
