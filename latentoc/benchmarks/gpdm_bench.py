@@ -3,7 +3,7 @@ Eq. 16, Newton iterations and convergence, with the machine it ran on.
 
 * the motions of :mod:`latentoc.benchmarks.gpdm_motions`, each N = 350, D = 37, d = 3 (the synthetic set,
   the CMU jump, the panda reach, a noisy curve with loops, a slow random walk): <= 3 s, converged, and Eq. 16
-  at the saddle-free learner's minimum to ftol |L| (column "- today": L minus it);
+  at the saddle-free learner's minimum to 1e-8 |L| (``same_minimum``; column "- today": L minus it);
 * the panda example at stride 1 from the CLI (examples/panda-reach/reach.csv, 251 x 7): <= 2 s wall,
   ``/usr/bin/time -v python -m latentoc learn ... --robot panda --hold ...`` (the README's command);
 * the broad jump's training set (157 x 37): <= 10 s, and the minimum of the shipped model;

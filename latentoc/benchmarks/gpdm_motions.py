@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["MINIMA", "MOTIONS", "PANDA", "benchmark_motion", "resampled", "same_minimum", "synthetic_motion"]
+__all__ = ["MINIMA", "MOTIONS", "PANDA", "SAME_RTOL", "benchmark_motion", "resampled", "same_minimum",
+           "synthetic_motion"]
 
 ROOT = Path(__file__).resolve().parents[2]
 PANDA = ROOT / "examples" / "panda-reach" / "reach.csv"
@@ -98,12 +99,15 @@ MOTIONS: dict[str, Callable[[], np.ndarray]] = {
 #: thread): a faster learner has to end in the same minimum (issue 52), :func:`same_minimum`
 MINIMA = {"synthetic": -128052.931856500, "jump": -185778.536748996, "panda": -179544.038854470,
           "loops": -109894.254462249, "walk": -115610.586224990}
+#: how far apart (relative) two values of Eq. 16 may be and still be one minimum: the saddle-free learner's own
+#: values scatter by up to 6.7e-10 from starts perturbed by 1e-10, the closest different minima measured are
+#: 1.2e-5 apart (docs/gpdm.md, issue 52's designs)
+SAME_RTOL = 1e-8
 
 
-def same_minimum(value: float, reference: float, ftol: float = 1e-10) -> bool:
-    """Whether Eq. 16 = ``value`` is the ``reference`` minimum to the learner's tolerance, ftol max(|L|, 1)
-    (:class:`~latentoc.gpdm.GPDMSettings`)."""
-    return abs(value - reference) <= ftol * max(abs(reference), 1.0)
+def same_minimum(value: float, reference: float, rtol: float = SAME_RTOL) -> bool:
+    """Whether Eq. 16 = ``value`` is the ``reference`` minimum: within rtol max(|L|, 1) of it."""
+    return abs(value - reference) <= rtol * max(abs(reference), 1.0)
 
 
 def benchmark_motion(name: str) -> np.ndarray:
