@@ -1,6 +1,7 @@
 """Broad-jump benchmark: the first solve on an empty cache, cold solves, where their time goes.
 
-Run: ``python -m latentoc bench jump [--tubes 0.02] [--no-first] [--no-second-gpdm] [--families]``.
+Run: ``python -m latentoc bench jump [--tubes 0.02] [--no-first] [--no-second-gpdm] [--families]``;
+``--profile [PROBLEM]``: where each Ipopt iteration of its solve goes (:mod:`.jump_profile`).
 Targets (issue 27): the first solve <= 3 min with all compilation; a second GPDM on a warm
 cache compiles nothing; a cold solve <= 20 s; function evaluations <= 50 ms per iteration.
 
@@ -141,7 +142,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-first", action="store_true", help="skip the first solve on an empty cache")
     p.add_argument("--no-second-gpdm", action="store_true")
     p.add_argument("--families", action="store_true", help="only each row family's evaluation times")
+    p.add_argument("--profile", nargs="?", const="broad-jump", metavar="PROBLEM",
+                   help="only where each Ipopt iteration of PROBLEM's solve goes (latentoc.benchmarks.jump_profile)")
     a = p.parse_args(argv)
+    if a.profile:
+        from latentoc.benchmarks import jump_profile
+
+        return jump_profile.main([a.profile, "--tube", str(a.tubes[0])] if len(a.tubes) == 1 and argv and "--tubes" in argv
+                                 else [a.profile])
     if a.families:
         print("| family | nodes | local inputs | values ms | local Jacobians ms | local Hessians ms |")
         print("| --- | --- | --- | --- | --- | --- |")

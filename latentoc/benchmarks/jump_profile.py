@@ -1,0 +1,186 @@
+"""Where a jump solve's Ipopt iterations go: ``python -m latentoc bench jump --profile [PROBLEM]``.
+
+Solves the problem as ``python -m latentoc solve`` does (:func:`latentoc.jump.problem.solve_jump_problem`)
+with timers around the pieces each Ipopt iteration is made of, and prints for every Ipopt run
+(phase 1, each exchange round of phase 2) its iterations and milliseconds per iteration in:
+
+* the compiled robot blocks (:class:`latentoc.nlp.evaluators.BlockEvaluator`: values, local
+  Jacobians, local Hessians, the closure's Newton steps and implicit derivatives included, since
+  they are inside each block), without the latent layer they call;
+* the latent layer (:mod:`latentoc.latent.gp_layer`, :mod:`latentoc.latent.residual_layer`): the GP
+  mean and its tangents (Eq. 18, 26-28), its curvature term, the tube's sigma^2 (Eq. 19);
+* the chain rule and assembly: the rest of the NLP callbacks (:mod:`latentoc.nlp.assemble`: local
+  inputs, the sparse products, scattering into Ipopt's patterns);
+* MUMPS (Ipopt's own timing statistics: symbolic and numeric factorisations, back-solves) and the
+  rest of Ipopt;
+
+then, outside Ipopt, the NLPs' builds, the 1 kHz checks between rounds and the set-up. Timers cost a
+few microseconds a call; the solve and its result are the ones ``solve`` gives.
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import tempfile
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["IterationProfile", "ipopt_timing", "profiled", "main"]
+
+PARTS = ("block values", "block Jacobians", "block Hessians", "latent layer", "chain rule & assembly", "MUMPS",
+         "rest of Ipopt")
+MUMPS_LINES = ("LinearSystemSymbolicFactorization", "LinearSystemFactorization", "LinearSystemBackSolve")
+
+
+def ipopt_timing(text: str) -> dict[str, float]:
+    """Wall seconds of each line of Ipopt's timing statistics (``print_timing_statistics``)."""
+    out = {}
+    for m in re.finditer(r"^\s*([A-Za-z0-9 ]+?)\.*:\s+[-0-9.e]+ \(sys:\s+[-0-9.e]+ wall:\s+([-0-9.e]+)\)", text, re.M):
+        out[m.group(1).strip()] = float(m.group(2))
+    return out
+
+
+@dataclass
+class IterationProfile:
+    """One Ipopt run: its description, iterations, wall seconds and each part's seconds (:data:`PARTS`)."""
+
+    desc: str
+    iterations: int
+    time_s: float
+    parts: dict[str, float] = field(default_factory=dict)
+
+    def per_iteration_ms(self) -> dict[str, float]:
+        it = max(self.iterations, 1)
+        return {k: 1e3 * self.parts.get(k, 0.0) / it for k in PARTS}
+
+
+class _Clock:
+    """Seconds per part, counting only the outermost call of a part (a layer calling a layer); the
+    layer's seconds inside each kind of block evaluation are kept apart too, to take them out of it."""
+
+    def __init__(self) -> None:
+        self.total: dict[str, float] = defaultdict(float)
+        self.depth: dict[str, int] = defaultdict(int)
+        self.evaluating: list[str] = []
+
+    def wrap(self, part: str, fn: Callable, evaluation: str | None = None) -> Callable:
+        def timed(*args, **kwargs):
+            self.depth[part] += 1
+            if evaluation:
+                self.evaluating.append(evaluation)
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                dt = time.perf_counter() - t0
+                self.depth[part] -= 1
+                if evaluation:
+                    self.evaluating.pop()
+                if self.depth[part] == 0:
+                    self.total[part] += dt
+                    if part == "layer" and self.evaluating:
+                        self.total[f"layer in {self.evaluating[-1]}"] += dt
+        return timed
+
+
+def _patch(owner, name: str, new) -> Callable[[], None]:
+    old = owner.__dict__[name]
+    setattr(owner, name, new)
+    return lambda: setattr(owner, name, old)
+
+
+@contextmanager
+def profiled() -> Iterator[list[IterationProfile]]:
+    """Within it, every :func:`latentoc.nlp.ipopt.solve` appends its :class:`IterationProfile`."""
+    from latentoc.latent import gp_layer, residual_layer
+    from latentoc.nlp import evaluators, ipopt
+
+    clock, runs, undo = _Clock(), [], []
+    for kind in ("values", "jacobian", "hessian"):
+        fn = evaluators.BlockEvaluator.__dict__[kind]
+        undo.append(_patch(evaluators.BlockEvaluator, kind, clock.wrap(f"evaluator {kind}", fn, kind)))
+    for cls in (gp_layer.GPLayer, gp_layer.IdentityLayer, residual_layer.ResidualLayer):
+        for method in ("motion", "curvature", "variance"):
+            if method in cls.__dict__:
+                undo.append(_patch(cls, method, clock.wrap("layer", cls.__dict__[method])))
+    solve = ipopt.solve
+
+    def profiled_solve(*args, **kwargs):
+        before = dict(clock.total)
+        with tempfile.TemporaryDirectory(prefix="latentoc-profile-") as tmp:
+            log = Path(tmp) / "ipopt.txt"
+            args = list(args)
+            opts = dict(args[6] if len(args) > 6 else kwargs.pop("options", None) or {})
+            opts.update(print_timing_statistics="yes", output_file=str(log), file_print_level=3)
+            if len(args) > 6:
+                args[6] = opts
+            else:
+                kwargs["options"] = opts
+            run = solve(*args, **kwargs)
+            timing = ipopt_timing(log.read_text()) if log.exists() else {}
+        d = {k: clock.total[k] - before.get(k, 0.0) for k in clock.total}
+        parts = {f"block {name}": d.get(f"evaluator {kind}", 0.0) - d.get(f"layer in {kind}", 0.0)
+                 for kind, name in (("values", "values"), ("jacobian", "Jacobians"), ("hessian", "Hessians"))}
+        parts["latent layer"] = d.get("layer", 0.0)
+        callbacks = sum(run.timings.values())
+        parts["chain rule & assembly"] = callbacks - sum(parts.values())
+        parts["MUMPS"] = sum(timing.get(k, 0.0) for k in MUMPS_LINES)
+        parts["rest of Ipopt"] = run.time_s - callbacks - parts["MUMPS"]
+        runs.append(IterationProfile(kwargs.get("desc", "ipopt"), run.iterations, run.time_s, parts))
+        return run
+
+    undo.append(_patch(ipopt, "solve", profiled_solve))
+    try:
+        yield runs
+    finally:
+        for u in reversed(undo):
+            u()
+
+
+def _table(runs: list[IterationProfile]) -> list[str]:
+    head = "| Ipopt run | iterations | s | " + " | ".join(f"{p} ms/it" for p in PARTS) + " |"
+    lines = [head, "|" + " --- |" * (3 + len(PARTS))]
+    for r in runs:
+        ms = r.per_iteration_ms()
+        lines.append(f"| {r.desc} | {r.iterations} | {r.time_s:.1f} | " + " | ".join(f"{ms[p]:.1f}" for p in PARTS) + " |")
+    its = sum(r.iterations for r in runs)
+    total = IterationProfile("all runs", its, sum(r.time_s for r in runs),
+                             {p: sum(r.parts.get(p, 0.0) for r in runs) for p in PARTS})
+    ms = total.per_iteration_ms()
+    lines.append(f"| **{total.desc}** | {its} | {total.time_s:.1f} | " + " | ".join(f"{ms[p]:.1f}" for p in PARTS) + " |")
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Solve the problem under the timers and print each Ipopt run's split and the solve's times."""
+    import os
+    import sys
+
+    from latentoc.jump.problem import solve_jump_problem
+    from latentoc.problem.toml_files import load_problem
+
+    p = argparse.ArgumentParser(prog="bench jump --profile", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("problem", nargs="?", default="broad-jump", help="a jump problem (default: broad-jump)")
+    p.add_argument("--tube", type=float, default=None, help="the tube's delta (default: the problem's)")
+    a = p.parse_args(argv)
+    problem = load_problem(a.problem)
+    t0 = time.perf_counter()
+    with profiled() as runs:
+        sol = solve_jump_problem(problem, **({"tube": a.tube} if a.tube is not None else {}))
+    wall = time.perf_counter() - t0
+    r = sol.result
+    load = os.getloadavg()
+    print(f"{a.problem}: {r['status']}, {r['distance']:.4f} m, {r['iterations']} iterations; machine: "
+          f"{os.cpu_count()} CPUs, load average {load[0]:.2f}, python {sys.version.split()[0]}")
+    print("\n".join(_table(runs)))
+    t = r["times"]
+    ipopt_s = sum(x.time_s for x in runs)
+    print(f"the solve {wall:.1f} s: Ipopt {ipopt_s:.1f} s, NLP builds {t['build_s']:.1f} s, 1 kHz checks "
+          f"{r['check_time_s']:.1f} s, blocks loaded or compiled {r['compile_time_s']:.1f} s, GPDM "
+          f"{r['gpdm_time_s']:.1f} s, the rest {wall - ipopt_s - t['build_s'] - r['check_time_s'] - r['compile_time_s'] - r['gpdm_time_s']:.1f} s")
+    return 0
