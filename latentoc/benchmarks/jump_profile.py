@@ -1,8 +1,7 @@
-"""Where a jump solve's Ipopt iterations go: ``python -m latentoc bench jump --profile [PROBLEM]``.
+"""Where a jump solve's Ipopt iterations go (``python -m latentoc bench jump --profile [PROBLEM]``).
 
-Solves the problem as ``python -m latentoc solve`` does (:func:`latentoc.jump.problem.solve_jump_problem`)
-with timers around the pieces each Ipopt iteration is made of, and prints for every Ipopt run
-(phase 1, each exchange round of phase 2) its iterations and milliseconds per iteration in:
+Within :func:`profiled`, every Ipopt run (phase 1, each exchange round of phase 2) is timed in the
+pieces each of its iterations is made of (:func:`profile_table` prints them per iteration):
 
 * the compiled robot blocks (:class:`latentoc.nlp.evaluators.BlockEvaluator`: values, local
   Jacobians, local Hessians, the closure's Newton steps and implicit derivatives included, since
@@ -14,12 +13,10 @@ with timers around the pieces each Ipopt iteration is made of, and prints for ev
 * MUMPS (Ipopt's own timing statistics: symbolic and numeric factorisations, back-solves) and the
   rest of Ipopt;
 
-then, outside Ipopt, the NLPs' builds, the 1 kHz checks between rounds and the set-up. Timers cost a
-few microseconds a call; the solve and its result are the ones ``solve`` gives.
+Timers cost a few microseconds a call; the solve and its result are the ones without them.
 """
 from __future__ import annotations
 
-import argparse
 import re
 import tempfile
 import time
@@ -29,7 +26,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["IterationProfile", "ipopt_timing", "profiled", "main"]
+__all__ = ["IterationProfile", "ipopt_timing", "profiled", "profile_table"]
 
 PARTS = ("block values", "block Jacobians", "block Hessians", "latent layer", "chain rule & assembly", "MUMPS",
          "rest of Ipopt")
@@ -141,7 +138,7 @@ def profiled() -> Iterator[list[IterationProfile]]:
             u()
 
 
-def _table(runs: list[IterationProfile]) -> list[str]:
+def profile_table(runs: list[IterationProfile]) -> list[str]:
     head = "| Ipopt run | iterations | s | " + " | ".join(f"{p} ms/it" for p in PARTS) + " |"
     lines = [head, "|" + " --- |" * (3 + len(PARTS))]
     for r in runs:
@@ -153,34 +150,3 @@ def _table(runs: list[IterationProfile]) -> list[str]:
     ms = total.per_iteration_ms()
     lines.append(f"| **{total.desc}** | {its} | {total.time_s:.1f} | " + " | ".join(f"{ms[p]:.1f}" for p in PARTS) + " |")
     return lines
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Solve the problem under the timers and print each Ipopt run's split and the solve's times."""
-    import os
-    import sys
-
-    from latentoc.jump.problem import solve_jump_problem
-    from latentoc.problem.toml_files import load_problem
-
-    p = argparse.ArgumentParser(prog="bench jump --profile", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("problem", nargs="?", default="broad-jump", help="a jump problem (default: broad-jump)")
-    p.add_argument("--tube", type=float, default=None, help="the tube's delta (default: the problem's)")
-    a = p.parse_args(argv)
-    problem = load_problem(a.problem)
-    t0 = time.perf_counter()
-    with profiled() as runs:
-        sol = solve_jump_problem(problem, **({"tube": a.tube} if a.tube is not None else {}))
-    wall = time.perf_counter() - t0
-    r = sol.result
-    load = os.getloadavg()
-    print(f"{a.problem}: {r['status']}, {r['distance']:.4f} m, {r['iterations']} iterations; machine: "
-          f"{os.cpu_count()} CPUs, load average {load[0]:.2f}, python {sys.version.split()[0]}")
-    print("\n".join(_table(runs)))
-    t = r["times"]
-    ipopt_s = sum(x.time_s for x in runs)
-    print(f"the solve {wall:.1f} s: Ipopt {ipopt_s:.1f} s, NLP builds {t['build_s']:.1f} s, 1 kHz checks "
-          f"{r['check_time_s']:.1f} s, blocks loaded or compiled {r['compile_time_s']:.1f} s, GPDM "
-          f"{r['gpdm_time_s']:.1f} s, the rest {wall - ipopt_s - t['build_s'] - r['check_time_s'] - r['compile_time_s'] - r['gpdm_time_s']:.1f} s")
-    return 0
