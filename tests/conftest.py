@@ -53,7 +53,7 @@ def small_jump(jump_parts):
     tc = contact_sample_grid(settings, ph)
     tf = np.round(np.arange(ph.takeoff + 0.02, ph.touchdown - 0.01, 0.05), 3)
     selection = Selection(np.ones((12, nk)), np.ones((12, 8)), tc, np.ones((len(tc), nk)), np.ones((len(tc), 8)),
-                          tf, np.ones((len(tf), nk)), tube_times(settings, ph, p.layer))
+                          tf, np.ones((len(tf), nk)), tube_times(ph, p.layer))
     nlp = build_nlp(p.robot, p.layer, p.blocks, ph, settings, js.init["P"], "distance", selection)
     x0 = initial_point(p.robot, p.layer, nlp, ph, js.init["P"], js.init["x_L"])
     return SimpleNamespace(**vars(p), settings=settings, nlp=nlp, x0=x0)

@@ -75,6 +75,7 @@ class JumpNLP:
     objective: str
     P_fixed: np.ndarray
     tau_fine: np.ndarray  # flight times (from takeoff) of the pitch integration
+    settings: JumpSettings  # what it was built with: its nodes, spline and tube (the exchange checks against it)
 
     def control_points(self, w: np.ndarray) -> np.ndarray:
         """All latent control points of solution ``w``: the fixed end points and the free ones."""
@@ -97,7 +98,7 @@ def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
             "land": np.linspace(ph.touchdown, ph.duration, s.n_land)}
 
 
-def tube_times(settings: JumpSettings, phases: Phases, layer: Layer) -> np.ndarray:
+def tube_times(phases: Phases, layer: Layer) -> np.ndarray:
     """The tube every :data:`~latentoc.jump.rows.tube_rows.TUBE_SPACING` inside the motion (its ends are the fixed end points); none on
     a joint path, which has no GPDM variance."""
     if not layer.has_tube:
@@ -147,7 +148,7 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
     grid = node_grid(s, ph)
     tc = np.concatenate([grid["stance"], grid["land"]])
     nC, nk = len(tc), len(robot.unmirrored)
-    sel = Selection.every_node_row(nC, nk, tube_times(s, ph, layer)) if selection is None else selection
+    sel = Selection.every_node_row(nC, nk, tube_times(ph, layer)) if selection is None else selection
     if sel.node_torque.shape != (nC, nk):
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
     if len(sel.tube) and not layer.has_tube:
@@ -166,7 +167,7 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
         half = np.broadcast_to(np.asarray(P_range, float), P0.shape)
         lbx[var.slices["P"]], ubx[var.slices["P"]] = (P0 - half).ravel(), (P0 + half).ravel()
     return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, spline, sel, objective,
-                   np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, FLIGHT_SUBSTEPS))
+                   np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, FLIGHT_SUBSTEPS), s)
 
 
 def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Function:
