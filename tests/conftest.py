@@ -41,7 +41,8 @@ def small_jump(jump_parts):
     its training start (:func:`latentoc.jump.solve.initial_point.initial_point`)."""
     import numpy as np
 
-    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid, tube_times
+    from latentoc.jump.schedule.phases import contact_sample_grid
+    from latentoc.jump.transcription.nlp import build_nlp, tube_times
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.settings import JumpSettings
     from latentoc.jump.solve.initial_point import initial_point

@@ -89,7 +89,8 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     start of phase 2's first NLP (every node row, samples on the packaged grids)."""
     import numpy as np
 
-    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid, flight_sample_grid, tube_times
+    from latentoc.jump.schedule.phases import contact_sample_grid, flight_sample_grid
+    from latentoc.jump.transcription.nlp import build_nlp, tube_times
     from latentoc.jump.problem import problem_setup, settings_from_problem
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.solve.initial_point import initial_point

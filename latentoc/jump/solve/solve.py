@@ -22,8 +22,8 @@ from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.exchange_rounds import Exchange, exchange_rounds
 from latentoc.jump.solve import exchange
 from latentoc.jump.check.export import trajectory
-from latentoc.jump.transcription.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid
-from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.transcription.nlp import JumpNLP, build_nlp
+from latentoc.jump.schedule.phases import Phases, contact_sample_grid, flight_sample_grid
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.transcription.selection import Selection
 from latentoc.jump.settings import JumpSettings
