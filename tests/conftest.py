@@ -41,7 +41,8 @@ def small_jump(jump_parts):
     its training start (:func:`latentoc.jump.solve.initial_point.initial_point`)."""
     import numpy as np
 
-    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid, tube_times
+    from latentoc.jump.schedule.phases import contact_sample_grid
+    from latentoc.jump.transcription.nlp import build_nlp, tube_times
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.settings import JumpSettings
     from latentoc.jump.solve.initial_point import initial_point
@@ -53,7 +54,7 @@ def small_jump(jump_parts):
     tc = contact_sample_grid(settings, ph)
     tf = np.round(np.arange(ph.takeoff + 0.02, ph.touchdown - 0.01, 0.05), 3)
     selection = Selection(np.ones((12, nk)), np.ones((12, 8)), tc, np.ones((len(tc), nk)), np.ones((len(tc), 8)),
-                          tf, np.ones((len(tf), nk)), tube_times(settings, ph, p.layer))
+                          tf, np.ones((len(tf), nk)), tube_times(ph, p.layer))
     nlp = build_nlp(p.robot, p.layer, p.blocks, ph, settings, js.init["P"], "distance", selection)
     x0 = initial_point(p.robot, p.layer, nlp, ph, js.init["P"], js.init["x_L"])
     return SimpleNamespace(**vars(p), settings=settings, nlp=nlp, x0=x0)

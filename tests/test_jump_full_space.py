@@ -17,7 +17,8 @@ from finite_differences import central4, dense
 def full_jump(jump_parts):
     """The small jump's NLP (tests/conftest.py's small_jump settings) along the joint spline within
     +-30 deg of the training joints' fit, and its training start."""
-    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid
+    from latentoc.jump.schedule.phases import contact_sample_grid
+    from latentoc.jump.transcription.nlp import build_nlp
     from latentoc.jump.schedule.path import joint_range_path
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.settings import JumpSettings

@@ -72,7 +72,8 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     start of phase 2's first NLP (every node row, samples on the packaged grids)."""
     import numpy as np
 
-    from latentoc.jump.transcription.nlp import build_nlp, contact_sample_grid, flight_sample_grid, tube_times
+    from latentoc.jump.schedule.phases import contact_sample_grid, flight_sample_grid
+    from latentoc.jump.transcription.nlp import build_nlp, tube_times
     from latentoc.jump.problem import problem_setup, settings_from_problem
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.solve.initial_point import initial_point
@@ -83,7 +84,7 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     js = problem_setup(problem)
     s = settings_from_problem(problem, tube)
     robot, layer, ph = js.robot(s.mu), GPLayer(js.gpdm), js.phases
-    full = Selection.every_node_row(s.n_stance + s.n_land, robot.unmirrored.size, tube_times(s, ph, layer))
+    full = Selection.every_node_row(s.n_stance + s.n_land, robot.unmirrored.size, tube_times(ph, layer))
     selection = full.with_samples(contact_sample_grid(s, ph), flight_sample_grid(s, ph))
     nlp = build_nlp(robot, layer, js.blocks(robot), ph, s, js.init["P"], "distance", selection)
     w = initial_point(robot, layer, nlp, ph, js.init["P"], js.init["x_L"])

@@ -20,7 +20,8 @@ Its modules, a folder per stage in the order the data flows:
 
 3. :mod:`.schedule` - when and along what:
 
-   * :mod:`.schedule.phases` - stance / flight / landing timing, the contact schedule, the knots;
+   * :mod:`.schedule.phases` - stance / flight / landing timing, the contact schedule, the knots, the
+     NLP's nodes and samples;
    * :mod:`.schedule.path` - the spline a method solves along (latent path, residual, joints);
 
 4. :mod:`.closure` - what follows from the path by construction:

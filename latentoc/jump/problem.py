@@ -378,7 +378,6 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
         assert path.P_range is not None
         r.update({"tube": None, "joint_range_deg": k, "joints": int(path.layer.latent_dim),
                   "fixed_joints": int(np.sum(np.all(path.P_range == 0, axis=0))), "max_tube_violation": 0.0})
-    r.pop("settings", None)  # solve_jump's copy of the JumpSettings: jump_settings above
     r.update(checks)
     if js.planted is not None:  # the training jump's change by planting, largest per joint (deg)
         r["training_planting_deg"] = js.planted.change_deg

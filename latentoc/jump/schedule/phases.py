@@ -1,4 +1,5 @@
-"""Phase timing of the jump, its contact schedule and the path's knots at its events (Sect. 4.2).
+"""Phase timing of the jump, its contact schedule, the path's knots at its events and the NLP's
+nodes and samples on the phases (Sect. 4.2).
 
 Takeoff and touchdown come from the training motion's contact timing, refined to the toe
 tip, on the body the stance and the landing plant (:mod:`..closure.planted_legs`):
@@ -18,6 +19,9 @@ until ``ball_off`` (0.267 s) and from ``ball_strike`` (0.717 s); the toe tip car
 every contact node.  A fixed contact sequence keeps the NLP free of complementarity rows,
 whose degenerate multipliers stalled Ipopt (measured in issue 6). The latent path has a double
 knot at each event that changes the contact model (:meth:`Phases.latent_spline`).
+The NLP's times on the phases, in the counts and spacing of :class:`~..settings.JumpSettings`: the
+contact and flight nodes (:func:`node_grid`) and the packaged contact and flight samples
+(:func:`contact_sample_grid`, :func:`flight_sample_grid`) that phase 2 starts with.
 """
 from __future__ import annotations
 
@@ -32,6 +36,7 @@ from latentoc.mocap.jumps import detect_jumps
 from latentoc.latent.spline import BSpline
 from latentoc.jump.robot.feet import POINTS, FootGeometry, foot_points, point_joint
 from latentoc.jump.demonstration.training import JumpTraining
+from latentoc.jump.settings import JumpSettings
 
 CONTACT_HEIGHT = 0.01  # m above the standing height: a heel or ball higher than this is off the ground
 
@@ -132,6 +137,42 @@ class Phases:
         t = np.array([self.heel_off + eps, self.ball_off + eps, self.ball_strike - eps, self.heel_strike - eps])
         inside = ((t > 0) & (t < self.takeoff)) | ((t > self.touchdown) & (t < self.duration))
         return t[inside]
+
+
+# ------------------------------------------------------------------ the NLP's nodes and samples on the phases
+def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
+    """Contact and flight node times: stance, flight, landing."""
+    s, ph = settings, phases
+    return {"stance": np.linspace(0.0, ph.takeoff, s.n_stance), "flight": np.linspace(ph.takeoff, ph.touchdown, s.n_flight),
+            "land": np.linspace(ph.touchdown, ph.duration, s.n_land)}
+
+
+def contact_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
+    """Contact sample times on the export's 1 kHz grid: every ``sample_spacing``, at the splines'
+    breakpoints (their accelerations kink there) and just inside each unloaded interval of the
+    contact schedule, in the stance and the landing, none within 1 ms of a contact node."""
+    s, ph = settings, phases
+    T = ph.duration
+    if s.sample_spacing <= 0:
+        return np.zeros(0)
+    knots = ph.latent_spline(s.n_control).breakpoints
+    sw = ph.switch_samples(eps=1.0 / rate_hz)
+    t = np.concatenate([np.arange(0.0, T, s.sample_spacing), knots, sw])
+    t = np.unique(np.round(t * rate_hz) / rate_hz)
+    grid = node_grid(s, ph)
+    nodes = np.concatenate([grid["stance"], grid["land"]])
+    inside = ((t > 0) & (t < ph.takeoff)) | ((t > ph.touchdown) & (t < T))
+    far = np.min(np.abs(t[:, None] - nodes[None, :]), axis=1) > 1.0 / rate_hz - 1e-9
+    return t[inside & far]
+
+
+def flight_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
+    """Flight sample times on the export's 1 kHz grid, about every ``sample_spacing`` inside the flight."""
+    ph, h = phases, settings.sample_spacing
+    if h <= 0:
+        return np.zeros(0)
+    t = np.unique(np.round(np.arange(ph.takeoff + h / 2, ph.touchdown, h) * rate_hz) / rate_hz)
+    return t[(t > ph.takeoff) & (t < ph.touchdown)]
 
 
 def toe_path(model: pin.Model, Q: np.ndarray, geom: FootGeometry) -> np.ndarray:

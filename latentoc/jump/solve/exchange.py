@@ -121,10 +121,10 @@ def _node_rows(nlp: JumpNLP, w: np.ndarray, robot: JumpRobot, phases: Phases, m:
 
 
 def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
-                robot: JumpRobot, phases: Phases, delta: float, m: Margins) -> Selection:
+                robot: JumpRobot, phases: Phases, m: Margins) -> Selection:
     """The rows within the margins ``m`` of binding at ``w`` (module doc): the contact nodes' own
     rows, and samples at the worst 1 kHz time of each stretch that comes that near; ``place``: the
-    unloaded points' clearance (:func:`clearance`); ``delta``: the tube's."""
+    unloaded points' clearance (:func:`clearance`)."""
     t = np.asarray(traj["t"])
     contact = np.asarray(traj["contact"]).astype(bool)
     inside = (t > 0) & (t < phases.duration)
@@ -154,33 +154,33 @@ def chosen_rows(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarra
     kf = _allowed(np.array(sorted(picked_f), int), ~contact & inside)
     kt = np.zeros(0, int)
     if "sigma2" in traj:  # a latent path: the tube
-        sigma = np.asarray(traj["sigma2"]) / delta
+        sigma = np.asarray(traj["sigma2"]) / nlp.settings.tube
         kt = _allowed(worst_times(-sigma, (sigma > 1.0 - m.tube) & inside, every, nb), inside)
     node_torque, node_polygon = _node_rows(nlp, w, robot, phases, m)
     return Selection(node_torque, node_polygon, t[kc], torque_near[kc], poly_near[kc], t[kf], torque_near[kf], t[kt])
 
 
 def seed_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
-                   robot: JumpRobot, phases: Phases, delta: float) -> Selection:
+                   robot: JumpRobot, phases: Phases) -> Selection:
     """Phase 1's selection from the full transcription ``nlp`` (every node row, the tube) at its start
     ``w``: every node row and the tube, and the flight samples within :data:`SEED` of binding there
     (no contact samples)."""
     nodes = nlp.selection
-    seed = chosen_rows(nlp, w, traj, sr, place, robot, phases, delta, SEED)
+    seed = chosen_rows(nlp, w, traj, sr, place, robot, phases, SEED)
     seed = seed.merged(Selection.empty(seed.node_torque.shape[0], seed.n_joints, nodes.tube))
     return nodes.merged(Selection(nodes.node_torque, nodes.node_polygon, seed.contact[:0], seed.contact_torque[:0],
                                   seed.contact_polygon[:0], seed.flight, seed.flight_torque, seed.tube))
 
 
 def grown_selection(nlp: JumpNLP, w: np.ndarray, traj: dict, sr: dict[str, np.ndarray], place: np.ndarray,
-                    robot: JumpRobot, phases: Phases, delta: float) -> tuple[Selection | None, dict[str, float]]:
+                    robot: JumpRobot, phases: Phases) -> tuple[Selection | None, dict[str, float]]:
     """After a solve of ``nlp`` to ``w``: the worst violation of each kind on the 1 kHz grid
     (:func:`violations`) and, where one is violated, ``nlp``'s selection with the rows within
     :data:`NEAR` of binding (:func:`chosen_rows`); None where nothing is violated or nothing new
     is added (the rows hold to Ipopt's tolerance)."""
-    worst = violations(sr, traj, delta, robot.weight, place)
+    worst = violations(sr, traj, nlp.settings.tube, robot.weight, place)
     if not violated(worst):
         return None, worst
-    more = nlp.selection.merged(chosen_rows(nlp, w, traj, sr, place, robot, phases, delta, NEAR))
+    more = nlp.selection.merged(chosen_rows(nlp, w, traj, sr, place, robot, phases, NEAR))
     grown = more.rows() > nlp.selection.rows() or len(more.contact) > len(nlp.selection.contact)
     return (more if grown else None), worst

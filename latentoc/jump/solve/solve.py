@@ -11,7 +11,7 @@ starts phase 2 from that solution's point, multipliers and rows.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -22,8 +22,8 @@ from latentoc.nlp.blocks import RobotBlock
 from latentoc.nlp.exchange_rounds import Exchange, exchange_rounds
 from latentoc.jump.solve import exchange
 from latentoc.jump.check.export import trajectory
-from latentoc.jump.transcription.nlp import JumpNLP, build_nlp, contact_sample_grid, flight_sample_grid
-from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.transcription.nlp import JumpNLP, build_nlp
+from latentoc.jump.schedule.phases import Phases, contact_sample_grid, flight_sample_grid
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.transcription.selection import Selection
 from latentoc.jump.settings import JumpSettings
@@ -134,7 +134,7 @@ class _Solve:
         x = initial_point(self.robot, self.layer, full, self.ph, P, x_L)
         self.lap("build_s")
         traj, sr, place = self.check(full, x)
-        nlp1 = self.build("feasibility", exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph, s.tube))
+        nlp1 = self.build("feasibility", exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph))
         x1, _ = carried_point(full, nlp1, x)
         run1 = self.run_ipopt(nlp1, x1, None, "phase 1 (feasible)")
         return nlp1, run1.x, run1
@@ -155,7 +155,7 @@ class _Solve:
 
         def check(nlp: JumpNLP, run: ipopt.IpoptResult) -> tuple[Selection | None, dict[str, float]]:
             traj, sr, place = self.check(nlp, run.x)
-            return exchange.grown_selection(nlp, run.x, traj, sr, place, self.robot, ph, s.tube)
+            return exchange.grown_selection(nlp, run.x, traj, sr, place, self.robot, ph)
 
         def resume(old: JumpNLP, new: JumpNLP, run: ipopt.IpoptResult) -> dict:
             x, lam_x = carried_point(old, new, run.x, run.lam_x)
@@ -191,13 +191,13 @@ def solve_jump(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], ph
     _, w, traj, sr = js.last_check  # type: ignore[misc]
     convergence = [{"phase": "1", "round": 1, "history": run1.history}] if run1 else []
     convergence += [{"phase": "2", "round": k + 1, "history": r.pop("history")} for k, r in enumerate(rounds)]
-    result = _result(settings, nlp2, run2, rounds, run1, nlp_start, warm is not None, js.clock)
+    result = _result(nlp2, run2, rounds, run1, nlp_start, warm is not None, js.clock)
     result["convergence"] = convergence
     result["consistent_start"] = js.consistent
     return JumpSolution(nlp2, w, run2, run1, traj, sr, result)
 
 
-def _result(s: JumpSettings, nlp2: JumpNLP, run2: ipopt.IpoptResult, rounds: list[dict],
+def _result(nlp2: JumpNLP, run2: ipopt.IpoptResult, rounds: list[dict],
             run1: ipopt.IpoptResult | None, nlp1: JumpNLP, warm: bool, clock: _Clock) -> dict:
     """The solve's result fields (:class:`JumpSolution`)."""
     viol = np.maximum(nlp2.lbg - run2.g, 0) + np.maximum(run2.g - nlp2.ubg, 0)
@@ -207,12 +207,12 @@ def _result(s: JumpSettings, nlp2: JumpNLP, run2: ipopt.IpoptResult, rounds: lis
         worst_kind[name] = max(worst_kind.get(name, 0.0), float(v))
         binding[name] = binding.get(name, 0.0) + float(lam)
     return {
-        "tube": s.tube, "status": run2.status, "success": run2.success,
+        "tube": nlp2.settings.tube, "status": run2.status, "success": run2.success,
         "iterations": sum(r["iterations"] for r in rounds) + (run1.iterations if run1 else 0),
         "times": dict(clock.parts), "objective": run2.f, "distance": float(nlp2.variables.unpack(run2.x)["x_L"][0]),
         "max_constraint_violation": float(viol.max(initial=0.0)), "constraint_violation_by_kind": worst_kind,
         # sum of |multiplier| per row kind: what binds (torque rows in units of each joint's limit range)
         "multiplier_by_kind": binding, "warm_start": warm,
         "phase1": _run_summary(run1, nlp1) if run1 else {}, "phase2_rounds": rounds,
-        "n_variables": int(nlp2.variables.n), "n_constraints": int(nlp2.nlp.m), "settings": asdict(s),
+        "n_variables": int(nlp2.variables.n), "n_constraints": int(nlp2.nlp.m),
     }

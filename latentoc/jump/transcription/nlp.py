@@ -33,7 +33,7 @@ from latentoc.nlp.assemble import SparseNLP
 from latentoc.nlp.blocks import RobotBlock
 from latentoc.latent.spline import BSpline
 from latentoc.jump.robot.feet import EDGES, POINTS
-from latentoc.jump.schedule.phases import Phases
+from latentoc.jump.schedule.phases import Phases, node_grid
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.rows import families, joint_limits
 from latentoc.jump.rows.flight import FLIGHT_SUBSTEPS, pitch_grid
@@ -43,7 +43,7 @@ from latentoc.jump.settings import JumpSettings
 from latentoc.jump.transcription.variables import JumpVariables
 from latentoc.jump.transcription.wiring import Wiring
 
-__all__ = ["JumpNLP", "build_nlp", "node_grid", "tube_times", "contact_sample_grid", "flight_sample_grid", "OBJECTIVES", "FORCE_REGULARISATION"]
+__all__ = ["JumpNLP", "build_nlp", "tube_times", "OBJECTIVES", "FORCE_REGULARISATION"]
 
 OBJECTIVES = ("feasibility", "distance")
 FORCE_REGULARISATION = 1e-4
@@ -75,6 +75,7 @@ class JumpNLP:
     objective: str
     P_fixed: np.ndarray
     tau_fine: np.ndarray  # flight times (from takeoff) of the pitch integration
+    settings: JumpSettings  # what it was built with: its nodes, spline and tube (the exchange checks against it)
 
     def control_points(self, w: np.ndarray) -> np.ndarray:
         """All latent control points of solution ``w``: the fixed end points and the free ones."""
@@ -90,48 +91,13 @@ class JumpNLP:
         return slice(off, off + next(f.n_rows for f in self.nlp.families if f.name == name))
 
 
-def node_grid(settings: JumpSettings, phases: Phases) -> dict[str, np.ndarray]:
-    """Contact and flight node times: stance, flight, landing."""
-    s, ph = settings, phases
-    return {"stance": np.linspace(0.0, ph.takeoff, s.n_stance), "flight": np.linspace(ph.takeoff, ph.touchdown, s.n_flight),
-            "land": np.linspace(ph.touchdown, ph.duration, s.n_land)}
-
-
-def tube_times(settings: JumpSettings, phases: Phases, layer: Layer) -> np.ndarray:
+def tube_times(phases: Phases, layer: Layer) -> np.ndarray:
     """The tube every :data:`~latentoc.jump.rows.tube_rows.TUBE_SPACING` inside the motion (its ends are the fixed end points); none on
     a joint path, which has no GPDM variance."""
     if not layer.has_tube:
         return np.zeros(0)
     T = phases.duration
     return np.linspace(0.0, T, max(2, int(round(T / TUBE_SPACING)) + 1))[1:-1]
-
-
-def contact_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
-    """Contact sample times on the export's 1 kHz grid: every ``sample_spacing``, at the splines'
-    breakpoints (their accelerations kink there) and just inside each unloaded interval of the
-    contact schedule, in the stance and the landing, none within 1 ms of a contact node."""
-    s, ph = settings, phases
-    T = ph.duration
-    if s.sample_spacing <= 0:
-        return np.zeros(0)
-    knots = ph.latent_spline(s.n_control).breakpoints
-    sw = ph.switch_samples(eps=1.0 / rate_hz)
-    t = np.concatenate([np.arange(0.0, T, s.sample_spacing), knots, sw])
-    t = np.unique(np.round(t * rate_hz) / rate_hz)
-    grid = node_grid(s, ph)
-    nodes = np.concatenate([grid["stance"], grid["land"]])
-    inside = ((t > 0) & (t < ph.takeoff)) | ((t > ph.touchdown) & (t < T))
-    far = np.min(np.abs(t[:, None] - nodes[None, :]), axis=1) > 1.0 / rate_hz - 1e-9
-    return t[inside & far]
-
-
-def flight_sample_grid(settings: JumpSettings, phases: Phases, rate_hz: float = 1000.0) -> np.ndarray:
-    """Flight sample times on the export's 1 kHz grid, about every ``sample_spacing`` inside the flight."""
-    ph, h = phases, settings.sample_spacing
-    if h <= 0:
-        return np.zeros(0)
-    t = np.unique(np.round(np.arange(ph.takeoff + h / 2, ph.touchdown, h) * rate_hz) / rate_hz)
-    return t[(t > ph.takeoff) & (t < ph.touchdown)]
 
 
 def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], phases: Phases,
@@ -147,7 +113,7 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
     grid = node_grid(s, ph)
     tc = np.concatenate([grid["stance"], grid["land"]])
     nC, nk = len(tc), len(robot.unmirrored)
-    sel = Selection.every_node_row(nC, nk, tube_times(s, ph, layer)) if selection is None else selection
+    sel = Selection.every_node_row(nC, nk, tube_times(ph, layer)) if selection is None else selection
     if sel.node_torque.shape != (nC, nk):
         raise ValueError(f"the selection is for {sel.node_torque.shape} contact nodes x joints, the NLP has {(nC, nk)}")
     if len(sel.tube) and not layer.has_tube:
@@ -166,7 +132,7 @@ def build_nlp(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], pha
         half = np.broadcast_to(np.asarray(P_range, float), P0.shape)
         lbx[var.slices["P"]], ubx[var.slices["P"]] = (P0 - half).ravel(), (P0 + half).ravel()
     return JumpNLP(nlp, var, lbx, ubx, lbg, ubg, names, times, comps, grid, spline, sel, objective,
-                   np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, FLIGHT_SUBSTEPS))
+                   np.asarray(P_fixed, float), pitch_grid(grid["flight"] - ph.takeoff, FLIGHT_SUBSTEPS), s)
 
 
 def _objective(var: JumpVariables, P_fixed: np.ndarray, objective: str) -> ca.Function:
