@@ -1,7 +1,7 @@
 """Results built by hand for the tests of the result schema, the plots and the 3-D view (no solve);
 a broad jump in the export's format from the real CMU model and training jump."""
 from __future__ import annotations
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 from functools import lru_cache
 from typing import Any

@@ -98,7 +98,7 @@ def test_closure_velocity_and_acceleration_are_the_time_derivatives_of_its_posit
 def test_g1_sole_held_flat_by_its_hip_roll_yaw_and_ankle_roll():
     """The G1 (a rigid sole, no hinge): its dependent joints and the planted sole's pose, still, for
     sideways-perturbed crouching legs."""
-    from latentoc.jump.robot.declaration import robot_model
+    from latentoc.jump.robot.robot_declaration import robot_model
     from tests.test_legged_robot import G1_ROBOT, _declared, _standing
 
     decl = _declared(G1_ROBOT)

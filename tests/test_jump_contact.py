@@ -2,7 +2,7 @@
 import casadi as ca
 import numpy as np
 import pinocchio as pin
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 from latentoc.dynamics import SymbolicModel
 from latentoc.jump.robot.feet import point_forces

@@ -2,7 +2,7 @@
 the NLP's nodes and samples (corrected_edge_weights)."""
 import numpy as np
 import pinocchio as pin
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 from latentoc.jump.robot.feet import generator_columns, point_jacobians
 from latentoc.jump.check.export import corrected_edge_weights

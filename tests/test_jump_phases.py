@@ -1,7 +1,7 @@
 """Phase timing of the symmetric training jump (Sect. 4.2: 1.3 s), checked against the data."""
 import numpy as np
 
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 from latentoc.jump.schedule.phases import toe_heights, training_phases
 from latentoc.mocap.jumps import detect_jumps
 from latentoc.jump.demonstration.training import training_jumps

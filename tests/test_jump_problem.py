@@ -1,6 +1,6 @@
 """The broad-jump problem kind (latentoc.jump.problem): [options], warm and cold starts, set-up."""
 from types import SimpleNamespace
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 import numpy as np
 import pytest

@@ -1,6 +1,6 @@
 """Training inverse dynamics: NNLS contact forces reproduce the base wrench where they can."""
 import numpy as np
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 from latentoc.jump.schedule.phases import training_phases
 from latentoc.jump.robot.torque_limits import estimate_training_dynamics

@@ -1,6 +1,6 @@
 """1 kHz verification machinery on an exactly balanced static stance, and (opt-in) a quick solve."""
 import os
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 import numpy as np
 import pinocchio as pin

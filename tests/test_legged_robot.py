@@ -1,4 +1,4 @@
-"""The contact kind's robot from a problem file's ``[robot]`` (latentoc.jump.robot.declaration): the CMU
+"""The contact kind's robot from a problem file's ``[robot]`` (latentoc.jump.robot.robot_declaration): the CMU
 humanoid and the Unitree G1 built from their declarations, the G1's contact rows against numeric
 Pinocchio, and bad declarations refused with the key named."""
 import tomllib
@@ -13,7 +13,7 @@ from latentoc.dynamics import SymbolicModel
 from latentoc.errors import ProblemError
 from latentoc.jump.closure.planted_legs import LegClosure
 from latentoc.jump.robot.feet import foot_points, point_forces
-from latentoc.jump.robot.declaration import CMU_HUMANOID, declaration, robot_model
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID, declaration, robot_model
 from latentoc.jump.problem import SCHEMA
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.rows.contact import block

@@ -3,7 +3,7 @@ their targets, the other frames keep the capture, and each frame's change is the
 weighted change lies in the row space of the constraint Jacobian: no move along the constraint's
 null space makes it smaller)."""
 from __future__ import annotations
-from latentoc.jump.robot.declaration import CMU_HUMANOID
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID
 
 import numpy as np
 import pinocchio as pin

@@ -4,7 +4,7 @@ Its modules, a folder per stage in the order the data flows:
 
 1. :mod:`.robot` - the robot and its feet:
 
-   * :mod:`.robot.declaration` - the ``[robot]`` table of a problem file: model, mirror, feet, limits;
+   * :mod:`.robot.robot_declaration` - the ``[robot]`` table of a problem file: model, mirror, feet, limits;
    * :mod:`.robot.sagittal_base` - the sagittal base (x, z, pitch) and its free-flyer q, v, a;
    * :mod:`.robot.feet` - the feet's contact points (heel, ball, toe tip, toe pad) and their forces;
    * :mod:`.robot.zmp` - zero-moment point from the centroidal momentum rate;

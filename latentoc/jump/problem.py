@@ -41,7 +41,7 @@ from latentoc.jump.rows import row_blocks
 from latentoc.jump.settings import FIELD_DOCS, JumpSettings
 from latentoc.jump.solve.solve import JumpSolution, solve_jump
 from latentoc.jump.robot.torque_limits import TorqueLimits, TrainingDynamics, estimate_training_dynamics, urdf_torque_limits
-from latentoc.jump.robot.declaration import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID, ROBOT_KEYS, RobotDeclaration, declaration, robot_model
 from latentoc.jump.demonstration.training import JumpTraining, antisymmetric_centre, motion_training, training_jumps
 
 __all__ = ["JumpSetup", "setup", "solve_jump_problem", "solve_from_starts", "usable_warm_start",
@@ -97,7 +97,7 @@ def setup(training: str | int = 0, latent_dim: int = 3, n_control: int = 27, tor
     """Model, GPDM, phases, feet, torque limits and training start. ``stride``: the GPDM learns
     every ``stride``-th captured frame (120 Hz) of each jump; ``plant``: the jumps' feet planted
     first (:mod:`.demonstration.planted`; of "all", the jumps whose contact schedule is whole); ``robot``: the
-    problem's ``[robot]`` (:mod:`.robot.declaration`), its motion relative to ``base_dir``; ``schedule``:
+    problem's ``[robot]`` (:mod:`.robot.robot_declaration`), its motion relative to ``base_dir``; ``schedule``:
     contact times that replace the detected ones (:func:`.schedule.phases.training_phases`)."""
     model, smap = robot_model(robot)
     if robot.motion:

@@ -8,7 +8,7 @@ whole set of a result folder from its files alone (``python -m latentoc plot RES
 * :mod:`.joints`: joint angles, velocities and torques with their limits
 * :mod:`.stick`: stick frames with their times and a scale
 * :mod:`.forces`: the jump's contact forces, cones, centre of pressure, ZMP and COM margins
-* :mod:`.feet`: the feet's contact points by name, frame and offset (shared with the 3-D view)
+* :mod:`.contact_points`: the feet's contact points by name, frame and offset (shared with the 3-D view)
 * :mod:`.convergence`: Ipopt's per-iteration history
 * :mod:`.studies`: gain against tube size, new start poses
 * :mod:`.kinematics`: the stick figure's bones (shared with the animation and the 3-D view)
@@ -17,7 +17,7 @@ whole set of a result folder from its files alone (``python -m latentoc plot RES
 from latentoc.plots.forces import (contact_series, plot_contact_forces, plot_contact_margins, plot_zmp_com, polygon_margin,
                                     support_vertices)
 from latentoc.plots.convergence import plot_convergence
-from latentoc.plots.feet import ContactPoints, contact_points_of, point_positions, world_forces
+from latentoc.plots.contact_points import ContactPoints, contact_points_of, point_positions, world_forces
 from latentoc.plots.figure import DPI, FIGSIZES, FORMATS, LIMIT_STYLE, pixel_size, save
 from latentoc.plots.joints import plot_joint_curves, plot_torques, plot_velocities
 from latentoc.plots.kinematics import (PLANES, SIDE_COLOURS, bones, floating_base, frame_indices, joint_positions, model_of, side,

@@ -1,7 +1,7 @@
 """The broad jump's contact constraints over time, from the result schema alone.
 
 From ``trajectory.npz`` (t, q, v, a, the per-foot ``wrench`` at the toe point, ``contact``,
-``touchdown``, ``settle``, the contact points (:mod:`.feet`: ``contact_points``,
+``touchdown``, ``settle``, the contact points (:mod:`.contact_points`: ``contact_points``,
 ``contact_frames``, the ``*_offset`` arrays), ``friction``, optionally ``point_forces``)
 :func:`contact_series` computes with numeric Pinocchio what the solver held: the normal force, the
 friction ratio against mu (the cone), each point's, the centre of pressure inside the foot (heel to
@@ -22,7 +22,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from latentoc.intervals import runs
 from latentoc.jump.robot.support_polygon import margin, support_polygon
-from latentoc.plots.feet import ContactPoints, contact_points_of
+from latentoc.plots.contact_points import ContactPoints, contact_points_of
 from latentoc.plots.figure import LIMIT_STYLE, new_figure, panel_axes
 
 POINT_COLOURS = ("C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9")  # no red: the limits' colour

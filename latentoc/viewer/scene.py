@@ -2,7 +2,7 @@
 for a contact motion the contact points, forces, friction cones, support polygon, COM and ZMP.
 
 The contact points are both feet's, as many per foot as the trajectory names (``contact_points``,
-placed by :mod:`latentoc.plots.feet`); each has its force arrow and friction cone, shown while its
+placed by :mod:`latentoc.plots.contact_points`); each has its force arrow and friction cone, shown while its
 foot is on the ground and the point is loaded (``loaded``). A result with no ``point_forces`` has
 each foot's wrench at its toe point.
 
@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from latentoc.plots.forces import contact_series
-from latentoc.plots.feet import MIRROR, contact_points_of, world_forces
+from latentoc.plots.contact_points import MIRROR, contact_points_of, world_forces
 from latentoc.plots.kinematics import floating_base, model_of
 from latentoc.errors import ArgumentError
 from latentoc.results import Result
@@ -74,7 +74,7 @@ def _part_json(p: Part, meshes: dict[str, int], mesh_data: list[dict[str, Any]])
 
 def contact_points(model: pin.Model, traj: Mapping[str, Any], Q: np.ndarray) -> np.ndarray:
     """World positions (n, 2 k, 3) of the left then the right foot's k contact points the trajectory
-    names (:func:`latentoc.plots.feet.contact_points_of`) at the configurations Q."""
+    names (:func:`latentoc.plots.contact_points.contact_points_of`) at the configurations Q."""
     return contact_points_of(model, traj).positions(model, Q)
 
 

@@ -24,7 +24,7 @@ from latentoc.robots.human_models import broad_jump_sequences
 from latentoc.mocap.symmetry import SymmetryMap
 from latentoc.motions.readers import MotionFileError, read_raw_motion
 from latentoc.jump.robot.sagittal_base import base_to_freeflyer, freeflyer_to_base
-from latentoc.jump.robot.declaration import CMU_HUMANOID, RobotDeclaration
+from latentoc.jump.robot.robot_declaration import CMU_HUMANOID, RobotDeclaration
 
 
 def antisymmetric_centre(smap: SymmetryMap) -> np.ndarray:

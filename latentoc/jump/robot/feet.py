@@ -1,6 +1,6 @@
 """Foot contact: points and contact forces (Sect. 4.2).
 
-Each foot has four contact points, declared per robot (:mod:`.declaration`; the right foot is the
+Each foot has four contact points, declared per robot (:mod:`.robot_declaration`; the right foot is the
 left's mirror image); their roles in the rows:
 
 * ``heel`` - the rearmost point (the CMU humanoid's: its ankle dropped to the ground standing);
