@@ -45,4 +45,7 @@ def test_profiled_ipopt_run_splits_its_time_and_leaves_the_solve_unchanged(small
     assert blocks > 0 and parts["latent layer"] > 0 and parts["chain rule & assembly"] > 0
     assert blocks + parts["latent layer"] <= sum(run.timings.values())
     assert 0 < parts["MUMPS"] <= run.time_s - sum(run.timings.values())
+    for kind, part in (("values", "block values"), ("jacobian", "block Jacobians"), ("hessian", "block Hessians")):
+        by_block = [v for (_, k), v in runs[0].blocks.items() if k == kind]
+        assert len(by_block) > 3 and np.isclose(sum(by_block), parts[part], rtol=1e-9)  # each block's share
     assert ipopt.solve.__name__ == "solve" and dict(evaluators.BlockEvaluator.__dict__) == methods

@@ -145,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
 def warm_solve(name: str, tube: float | None) -> None:
     """Solve ``name`` (at ``tube``; None: the problem's) as ``solve`` does, on the warm cache, under the
     profile's timers, and print its times and each Ipopt run's split."""
-    from latentoc.benchmarks.jump_profile import profile_table, profiled
+    from latentoc.benchmarks.jump_profile import block_table, profile_table, profiled
     from latentoc.errors import LatentocError
     from latentoc.jump.problem import solve_jump_problem
     from latentoc.problem.toml_files import load_problem
@@ -172,6 +172,7 @@ def warm_solve(name: str, tube: float | None) -> None:
         per_it = sum(x.time_s for x in phase2) / max(sum(x.iterations for x in phase2), 1)
         print(f"  a phase-2 Ipopt iteration: {per_it:.3f} s (target {TARGET_PHASE2_ITERATION_S:g} s)")
     print("\n".join(profile_table(runs)))
+    print("\n".join(block_table(runs)))
 
 
 if __name__ == "__main__":

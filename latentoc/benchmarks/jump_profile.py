@@ -26,7 +26,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["IterationProfile", "ipopt_timing", "profiled", "profile_table"]
+__all__ = ["IterationProfile", "ipopt_timing", "profiled", "profile_table", "block_table"]
 
 PARTS = ("block values", "block Jacobians", "block Hessians", "latent layer", "chain rule & assembly", "MUMPS",
          "rest of Ipopt")
@@ -49,6 +49,7 @@ class IterationProfile:
     iterations: int
     time_s: float
     parts: dict[str, float] = field(default_factory=dict)
+    blocks: dict[tuple[str, str], float] = field(default_factory=dict)  # (block, kind): its seconds
 
     def per_iteration_ms(self) -> dict[str, float]:
         it = max(self.iterations, 1)
@@ -56,8 +57,9 @@ class IterationProfile:
 
 
 class _Clock:
-    """Seconds per part, counting only the outermost call of a part (a layer calling a layer); the
-    layer's seconds inside each kind of block evaluation are kept apart too, to take them out of it."""
+    """Seconds per part, counting only the outermost call of a part (a layer calling a layer); a block
+    evaluation's seconds are also kept by its kind and block, with the layer's seconds inside it, to
+    take them out of the block's share."""
 
     def __init__(self) -> None:
         self.total: dict[str, float] = defaultdict(float)
@@ -66,20 +68,24 @@ class _Clock:
 
     def wrap(self, part: str, fn: Callable, evaluation: str | None = None) -> Callable:
         def timed(*args, **kwargs):
+            key = f"{evaluation} {args[0].block.name}" if evaluation else None
             self.depth[part] += 1
-            if evaluation:
-                self.evaluating.append(evaluation)
+            if key:
+                self.evaluating.append(key)
             t0 = time.perf_counter()
             try:
                 return fn(*args, **kwargs)
             finally:
                 dt = time.perf_counter() - t0
                 self.depth[part] -= 1
-                if evaluation:
+                if key:
                     self.evaluating.pop()
+                    self.total[f"evaluation {key}"] += dt
                 if self.depth[part] == 0:
                     self.total[part] += dt
                     if part == "layer" and self.evaluating:
+                        kind = self.evaluating[-1].split()[0]
+                        self.total[f"layer in {kind}"] += dt
                         self.total[f"layer in {self.evaluating[-1]}"] += dt
         return timed
 
@@ -127,7 +133,9 @@ def profiled() -> Iterator[list[IterationProfile]]:
         parts["chain rule & assembly"] = callbacks - sum(parts.values())
         parts["MUMPS"] = sum(timing.get(k, 0.0) for k in MUMPS_LINES)
         parts["rest of Ipopt"] = run.time_s - callbacks - parts["MUMPS"]
-        runs.append(IterationProfile(kwargs.get("desc", "ipopt"), run.iterations, run.time_s, parts))
+        blocks = {(k.split()[2], k.split()[1]): v - d.get("layer in " + k.split(maxsplit=1)[1], 0.0)
+                  for k, v in d.items() if k.startswith("evaluation ")}
+        runs.append(IterationProfile(kwargs.get("desc", "ipopt"), run.iterations, run.time_s, parts, blocks))
         return run
 
     undo.append(_patch(ipopt, "solve", profiled_solve))
@@ -149,4 +157,18 @@ def profile_table(runs: list[IterationProfile]) -> list[str]:
                              {p: sum(r.parts.get(p, 0.0) for r in runs) for p in PARTS})
     ms = total.per_iteration_ms()
     lines.append(f"| **{total.desc}** | {its} | {total.time_s:.1f} | " + " | ".join(f"{ms[p]:.1f}" for p in PARTS) + " |")
+    return lines
+
+
+def block_table(runs: list[IterationProfile]) -> list[str]:
+    """Each robot block's ms per iteration over all ``runs`` (values, Jacobians, Hessians), slowest first."""
+    its = max(sum(r.iterations for r in runs), 1)
+    total: dict[tuple[str, str], float] = defaultdict(float)
+    for r in runs:
+        for k, v in r.blocks.items():
+            total[k] += v
+    names = sorted({b for b, _ in total}, key=lambda b: -sum(total[b, k] for k in ("values", "jacobian", "hessian")))
+    lines = ["| block | values ms/it | Jacobians ms/it | Hessians ms/it |", "| --- | --- | --- | --- |"]
+    for b in names:
+        lines.append(f"| {b} | " + " | ".join(f"{1e3 * total[b, k] / its:.1f}" for k in ("values", "jacobian", "hessian")) + " |")
     return lines
