@@ -34,9 +34,10 @@ def test_profiled_ipopt_run_splits_its_time_and_leaves_the_solve_unchanged(small
     opts = {"max_iter": 3, "print_level": 0}
     plain = ipopt.solve(nlp.nlp, sj.x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, opts, desc="plain")
     methods = dict(evaluators.BlockEvaluator.__dict__)
-    with profiled() as runs:
+    with profiled() as profile:
         run = ipopt.solve(nlp.nlp, sj.x0, nlp.lbx, nlp.ubx, nlp.lbg, nlp.ubg, opts, desc="timed")
     np.testing.assert_array_equal(run.x, plain.x)
+    runs = profile.runs
     assert [r.desc for r in runs] == ["timed"] and runs[0].iterations == run.iterations == 3
     parts = runs[0].parts
     assert set(parts) == set(PARTS)

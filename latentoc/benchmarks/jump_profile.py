@@ -26,7 +26,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["IterationProfile", "ipopt_timing", "profiled", "profile_table", "block_table"]
+__all__ = ["IterationProfile", "SolveProfile", "ipopt_timing", "profiled", "profile_table", "block_table"]
 
 PARTS = ("block values", "block Jacobians", "block Hessians", "latent layer", "chain rule & assembly", "MUMPS",
          "rest of Ipopt")
@@ -54,6 +54,15 @@ class IterationProfile:
     def per_iteration_ms(self) -> dict[str, float]:
         it = max(self.iterations, 1)
         return {k: 1e3 * self.parts.get(k, 0.0) / it for k in PARTS}
+
+
+@dataclass
+class SolveProfile:
+    """A solve's Ipopt runs and its timers' seconds (``seconds["consistent start"]``: the consistent
+    start, counted by the solve within its NLP builds)."""
+
+    runs: list[IterationProfile]
+    seconds: dict[str, float]
 
 
 class _Clock:
@@ -97,8 +106,10 @@ def _patch(owner, name: str, new) -> Callable[[], None]:
 
 
 @contextmanager
-def profiled() -> Iterator[list[IterationProfile]]:
-    """Within it, every :func:`latentoc.nlp.ipopt.solve` appends its :class:`IterationProfile`."""
+def profiled() -> Iterator["SolveProfile"]:
+    """Within it, every :func:`latentoc.nlp.ipopt.solve` appends its :class:`IterationProfile` to the
+    yielded profile's runs, and the jump's consistent start (:mod:`latentoc.jump.solve.consistent_path`)
+    is timed."""
     from latentoc.latent import gp_layer, residual_layer
     from latentoc.nlp import evaluators, ipopt
 
@@ -110,6 +121,9 @@ def profiled() -> Iterator[list[IterationProfile]]:
         for method in ("motion", "curvature", "variance"):
             if method in cls.__dict__:
                 undo.append(_patch(cls, method, clock.wrap("layer", cls.__dict__[method])))
+    from latentoc.jump.solve import solve as jump_solve
+
+    undo.append(_patch(jump_solve, "consistent_path", clock.wrap("consistent start", jump_solve.consistent_path)))
     solve = ipopt.solve
 
     def profiled_solve(*args, **kwargs):
@@ -140,7 +154,7 @@ def profiled() -> Iterator[list[IterationProfile]]:
 
     undo.append(_patch(ipopt, "solve", profiled_solve))
     try:
-        yield runs
+        yield SolveProfile(runs, clock.total)
     finally:
         for u in reversed(undo):
             u()
