@@ -169,6 +169,11 @@ def warm_solve(name: str, tube: float | None) -> None:
           f"{r['compile_time_s']:.1f} s + GPDM {r['gpdm_time_s']:.1f} s + set-up {rest:.1f} s; {r['status']}, "
           f"{r['distance']:.4f} m, {r['iterations']} iterations; peak RSS "
           f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+    start = dict(r.get("start_violation") or {})
+    if start:
+        worst = sorted(((v, k) for k, v in start.items() if k != "max"), reverse=True)[:3]
+        print(f"  phase 1's start: largest row violation {start['max']:.3g} (" +
+              ", ".join(f"{k} {v:.3g}" for v, k in worst) + ")")
     phase2 = [x for x in runs if "phase 2" in x.desc]
     if phase2:
         per_it = sum(x.time_s for x in phase2) / max(sum(x.iterations for x in phase2), 1)

@@ -93,6 +93,7 @@ class _Solve:
         self.t0 = time.perf_counter()
         self.last_check: tuple[JumpNLP, np.ndarray, dict, dict] | None = None
         self.consistent: dict = {}  # the consistent start's residuals (:mod:`.consistent_path`)
+        self.start_violation: dict[str, float] = {}  # phase 1's rows at its start: the worst per row kind
 
     def lap(self, part: str) -> None:
         self.t0 = self.clock.add(part, self.t0)
@@ -136,6 +137,7 @@ class _Solve:
         traj, sr, place = self.check(full, x)
         nlp1 = self.build("feasibility", exchange.seed_selection(full, x, traj, sr, place, self.robot, self.ph))
         x1, _ = carried_point(full, nlp1, x)
+        self.start_violation = _violation_by_kind(nlp1, nlp1.nlp.constraints(x1))
         run1 = self.run_ipopt(nlp1, x1, None, "phase 1 (feasible)")
         return nlp1, run1.x, run1
 
@@ -194,23 +196,33 @@ def solve_jump(robot: JumpRobot, layer: Layer, blocks: dict[str, RobotBlock], ph
     result = _result(nlp2, run2, rounds, run1, nlp_start, warm is not None, js.clock)
     result["convergence"] = convergence
     result["consistent_start"] = js.consistent
+    result["start_violation"] = js.start_violation
     return JumpSolution(nlp2, w, run2, run1, traj, sr, result)
+
+
+def _violation_by_kind(nlp: JumpNLP, g: np.ndarray) -> dict[str, float]:
+    """The largest violation of each kind of row of ``nlp`` at constraint values ``g`` (each in its
+    row's own unit), and of all (``"max"``)."""
+    viol = np.maximum(nlp.lbg - g, 0) + np.maximum(g - nlp.ubg, 0)
+    out: dict[str, float] = {"max": float(viol.max(initial=0.0))}
+    for name, v in zip(nlp.row_names, viol):
+        out[name] = max(out.get(name, 0.0), float(v))
+    return out
 
 
 def _result(nlp2: JumpNLP, run2: ipopt.IpoptResult, rounds: list[dict],
             run1: ipopt.IpoptResult | None, nlp1: JumpNLP, warm: bool, clock: _Clock) -> dict:
     """The solve's result fields (:class:`JumpSolution`)."""
-    viol = np.maximum(nlp2.lbg - run2.g, 0) + np.maximum(run2.g - nlp2.ubg, 0)
-    worst_kind: dict[str, float] = {}
+    worst_kind = _violation_by_kind(nlp2, run2.g)
+    worst = worst_kind.pop("max")
     binding: dict[str, float] = {}
-    for name, v, lam in zip(nlp2.row_names, viol, np.abs(run2.lam_g)):
-        worst_kind[name] = max(worst_kind.get(name, 0.0), float(v))
+    for name, lam in zip(nlp2.row_names, np.abs(run2.lam_g)):
         binding[name] = binding.get(name, 0.0) + float(lam)
     return {
         "tube": nlp2.settings.tube, "status": run2.status, "success": run2.success,
         "iterations": sum(r["iterations"] for r in rounds) + (run1.iterations if run1 else 0),
         "times": dict(clock.parts), "objective": run2.f, "distance": float(nlp2.variables.unpack(run2.x)["x_L"][0]),
-        "max_constraint_violation": float(viol.max(initial=0.0)), "constraint_violation_by_kind": worst_kind,
+        "max_constraint_violation": worst, "constraint_violation_by_kind": worst_kind,
         # sum of |multiplier| per row kind: what binds (torque rows in units of each joint's limit range)
         "multiplier_by_kind": binding, "warm_start": warm,
         "phase1": _run_summary(run1, nlp1) if run1 else {}, "phase2_rounds": rounds,
