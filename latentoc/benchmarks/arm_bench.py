@@ -1,7 +1,7 @@
 """Arm benchmark: the first solve on an empty cache, warm solve times and where they go.
 
 Run: ``python -m latentoc bench arm [--problem arm-raise] [--tubes 5x] [--ranges 20 60]
-[--repeat 5] [--no-first]``. Targets (issue 46): the first solve <= 5 s, the 5x solve <= 0.3 s.
+[--repeat 5] [--no-first]``. Targets: the first solve <= 5 s, the 5x solve <= 0.3 s.
 
 * first solve: ``python -m latentoc solve`` in a subprocess with a new, empty
   ``$LATENTOC_CACHE`` (so every robot block is generated and compiled, its large pieces quickly:

@@ -1,4 +1,4 @@
-"""The motions GPDM learning is timed on (``python -m latentoc bench gpdm``, issue 52): several kinds of
+"""The motions GPDM learning is timed on (``python -m latentoc bench gpdm``): several kinds of
 motion, each N = 350 frames of D = 37 dimensions from a fixed seed, so that learning is measured on
 data it was not tuned on, not only on its own synthetic set.
 
@@ -96,12 +96,12 @@ MOTIONS: dict[str, Callable[[], np.ndarray]] = {
 
 
 #: Eq. 16 where the saddle-free learner ends on each motion (commit f403ce1; numpy 2.4.6, scipy 1.17.1, one BLAS
-#: thread): a faster learner has to end in the same minimum (issue 52), :func:`same_minimum`
+#: thread): a faster learner has to end in the same minimum, :func:`same_minimum`
 MINIMA = {"synthetic": -128052.931856500, "jump": -185778.536748996, "panda": -179544.038854470,
           "loops": -109894.254462249, "walk": -115610.586224990}
 #: how far apart (relative) two values of Eq. 16 may be and still be one minimum: the saddle-free learner's own
 #: values scatter by up to 6.7e-10 from starts perturbed by 1e-10, the closest different minima measured are
-#: 1.2e-5 apart (docs/gpdm.md, issue 52's designs)
+#: 1.2e-5 apart (docs/gpdm.md, "Motions it was not tuned on")
 SAME_RTOL = 1e-8
 
 

@@ -1,4 +1,4 @@
-"""The GP layer plus a joint-space residual on some joints (issue 34 experiment).
+"""The GP layer plus a joint-space residual on some joints (the jump's leg residual, :func:`latentoc.jump.schedule.path.leg_residual_path`).
 
 The path is (x, r): x the latent spline (d), r a residual added to the joints ``joints`` (r of
 them): y = GP mean(x) + E r, so dy/dr = E and the residual is linear (no curvature); the tube

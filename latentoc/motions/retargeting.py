@@ -1,4 +1,4 @@
-"""A demonstration retargeted to another robot: scaled keypoint IK, one solve per frame (issue 35).
+"""A demonstration retargeted to another robot: scaled keypoint IK, one solve per frame.
 
 Each :class:`Keypoint` pairs a frame of the source model (the CMU humanoid's ``lfoot``) with a point
 of the target robot (its ``left_ankle_roll_link``, with an offset in that frame). Per frame the

@@ -1,4 +1,4 @@
-"""Post-check of a jump on a 1 kHz grid with numeric Pinocchio (issue 6 verification).
+"""Post-check of a jump on a 1 kHz grid with numeric Pinocchio.
 
 From exported arrays only (``t``, ``q``, ``v``, ``a``, ``wrench`` = the per-foot contact
 wrench at the toe tip, world-aligned, on the 1 kHz grid, optionally ``point_forces`` (n, 4, 2):

@@ -1,4 +1,4 @@
-"""The training jump with its feet planted, before the GPDM learns it (issue 34).
+"""The training jump with its feet planted, before the GPDM learns it.
 
 The captured toes move by about a centimetre in stance (and 3 cm sideways), and the toe tip sinks
 1.4 cm into the floor at the push-off, so a model that learns the capture learns feet that slide.

@@ -1,6 +1,6 @@
 """Sagittal-plane floating base (x, z, pitch) of the jumping humanoid.
 
-Design choice (issue 6): the base is *not* in the latent space and the jump is
+Design choice: the base is *not* in the latent space and the jump is
 left-right symmetric, so the base is restricted to the sagittal plane: position
 (x, 0, z), orientation a rotation by ``pitch`` about the world y axis.  The
 free-flyer configuration is built from it (quaternion (0, sin(p/2), 0, cos(p/2)),

@@ -10,7 +10,7 @@ points the contact schedule loads push (:mod:`..schedule.phases`), as in the NLP
 joint torques are ``tau = rnea_joint - (J^T f)_joint``; the limits are their per-joint
 minimum and maximum over the motion, widened by ``margin`` times the joint's peak |tau|, at
 least ``floor`` N m: the head and neck carry 2-10 N m, and 10 % of that bound the whole jump
-(the head's limit had the largest multiplier at the optimum, measured in issue 6).
+(the head's limit had the largest multiplier at the optimum, docs/broad-jump-history.md).
 """
 from __future__ import annotations
 

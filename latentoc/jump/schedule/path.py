@@ -13,7 +13,7 @@ With ``[options] leg_residual`` (deg) the latent path carries a residual beside 
 (x, r), the left leg's sagittal joints are the GP mean's plus r (:class:`~latentoc.latent.residual_layer.ResidualLayer`),
 each free control point of r within +-leg_residual of zero, the tube on x alone. With the planted
 foot by construction (:mod:`..closure.planted_legs`) the base follows the legs, and this residual is what lets them
-carry a physical push-off (docs/broad-jump.md, issue 45).
+carry a physical push-off (docs/broad-jump.md, "The path").
 
 Every other row of the jump (contact, flight, ZMP, COM, torque limits, friction) is the same NLP.
 """

@@ -4,20 +4,18 @@ nodes and samples on the phases (Sect. 4.2).
 Takeoff and touchdown come from the training motion's contact timing, refined to the toe
 tip, on the body the stance and the landing plant (:mod:`..closure.planted_legs`):
 :func:`latentoc.mocap.jumps.detect_jumps` finds the flight by the feet's height (1.5 cm
-above their floor: 0.350 s and 0.683 s on the paper's jump); the toe tip, however, leaves
-the ground earlier and lands later.  Takeoff is the toe-off, the frame at which the toe tip
-is lowest in the 0.1 s before the detected takeoff (0.308 s: it then rises and is 2.2 cm up,
-moving at 1.4 m/s, by 0.350 s, so a toe pinned until 0.350 s cannot take the captured
-takeoff velocity, measured in issue 6); touchdown is the first frame after the detected one
-at which the toe tip is back at its standing height (0.692 s).
+above their floor); the toe tip, however, leaves the ground earlier and lands later. Takeoff is
+the toe-off, the frame at which the toe tip is lowest in the 0.1 s before the detected takeoff
+(after it the tip rises fast, so a toe pinned until the detected takeoff could not take the
+captured takeoff velocity); touchdown is the first frame after the detected one at which the toe
+tip is back at its standing height. docs/broad-jump.md, "The training jump", prints the times.
 The landing is "settled" (Eq. 36's COM-in-polygon constraint applies) from the first
 training frame after touchdown at which the projected COM is inside the feet's polygon.
 Contact schedule: the heel and the ball carry force only while they are on the ground in the
 training motion (within ``CONTACT_HEIGHT`` of their standing height): the heel until
-``heel_off`` (0.200 s on the paper's jump) and again from ``heel_strike`` (0.792 s), the ball
-until ``ball_off`` (0.267 s) and from ``ball_strike`` (0.717 s); the toe tip carries force in
-every contact node.  A fixed contact sequence keeps the NLP free of complementarity rows,
-whose degenerate multipliers stalled Ipopt (measured in issue 6). The latent path has a double
+``heel_off`` and again from ``heel_strike``, the ball until ``ball_off`` and from ``ball_strike``;
+the toe tip carries force in every contact node. A fixed contact sequence keeps the NLP free of
+complementarity rows, whose degenerate multipliers stalled Ipopt (docs/broad-jump-history.md). The latent path has a double
 knot at each event that changes the contact model (:meth:`Phases.latent_spline`).
 The NLP's times on the phases, in the counts and spacing of :class:`~..settings.JumpSettings`: the
 contact and flight nodes (:func:`node_grid`) and the packaged contact and flight samples
