@@ -1,9 +1,13 @@
 """Robot-block sizes: SX instructions of each broad-jump row family's compiled pieces.
 
-Run: ``python -m latentoc bench blocks [--compile]``. Prints, per row family, its outputs, its
+Run: ``python -m latentoc bench blocks [--problem broad-jump] [--newton-steps N] [--compile]``. Prints,
+per row family of the problem's path (its latent dimension with the leg residual), its outputs, its
 local inputs and the instructions of its rows, local Jacobian and local Hessian
-(:mod:`latentoc.nlp.blocks`); with ``--compile`` also gcc's time at -O0 and -O1 for each piece
-and one evaluation mapped over the family's nodes in the packaged problem (one thread).
+(:mod:`latentoc.nlp.blocks`) and one evaluation of each in CasADi's virtual machine; ``--newton-steps``:
+the planted leg's closure unrolled with N Newton steps instead of
+:data:`~latentoc.jump.closure.planted_legs.NEWTON_STEPS` (what the unrolling costs); with ``--compile``
+also gcc's time at -O0 and -O1 for each piece and one evaluation mapped over the family's nodes in
+the packaged problem (one thread).
 """
 from __future__ import annotations
 
@@ -20,23 +24,39 @@ NODES = {"contact": 94, "flight_dynamics": 80, "flight_clearance": 78, "pitch_ra
 
 
 def main(argv: list[str] | None = None) -> int:
-    from latentoc.jump.problem import setup
+    from latentoc.jump.closure import planted_legs
+    from latentoc.jump.problem import jump_path, problem_setup
     from latentoc.jump.rows import row_blocks
     from latentoc.nlp.jit import compiler
+    from latentoc.problem.toml_files import load_problem
 
     p = argparse.ArgumentParser(prog="blocks_bench", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--problem", default="broad-jump", help="a jump problem (default: broad-jump)")
+    p.add_argument("--newton-steps", type=int, default=None, help="the closure's Newton steps (default: the package's)")
     p.add_argument("--compile", action="store_true", help="also time gcc and one mapped evaluation")
     a = p.parse_args(argv)
-    js = setup(0)
-    blocks = row_blocks(js.robot(0.4), js.gpdm.latent_dim)
-    print("| family | outputs | local inputs | rows | local Jacobian | local Hessian |")
-    print("| --- | --- | --- | --- | --- | --- |")
-    fns = {}
-    for name, b in blocks.items():
-        fns[name] = b.derivative_functions()
-        n = {k: f.n_instructions() for k, f in fns[name].items()}
-        print(f"| {name} | {b.n_out} | {b.n_local} | {n['rows']:,} | {n['jac']:,} | {n['hess']:,} |", flush=True)
+    problem = load_problem(a.problem)
+    js = problem_setup(problem)
+    d = jump_path(js, problem.options["leg_residual"]).layer.latent_dim
+    steps = planted_legs.NEWTON_STEPS
+    if a.newton_steps is not None:
+        planted_legs.NEWTON_STEPS = a.newton_steps
+    try:
+        blocks = row_blocks(js.robot(0.4), d)
+        print(f"{a.problem}: latent dimension {d} (with the leg residual), the closure's Newton steps "
+              f"{planted_legs.NEWTON_STEPS}; ms: one evaluation in CasADi's virtual machine")
+        print("| family | outputs | local inputs | rows | local Jacobian | local Hessian | Jacobian ms | Hessian ms |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        fns = {}
+        for name, b in blocks.items():
+            fns[name] = b.derivative_functions()
+            n = {k: f.n_instructions() for k, f in fns[name].items()}
+            ms = {k: _vm_ms(fns[name][k]) for k in ("jac", "hess")}
+            print(f"| {name} | {b.n_out} | {b.n_local} | {n['rows']:,} | {n['jac']:,} | {n['hess']:,} | "
+                  f"{ms['jac']:.2f} | {ms['hess']:.2f} |", flush=True)
+    finally:
+        planted_legs.NEWTON_STEPS = steps
     if not a.compile:
         return 0
     cc = compiler()
@@ -67,6 +87,18 @@ def main(argv: list[str] | None = None) -> int:
                     evals.append(f"{1e3 * float(np.median(ts)):.1f}")
                 print("| " + " | ".join(row + evals) + " |", flush=True)
     return 0
+
+
+def _vm_ms(f: ca.Function, repeat: int = 20) -> float:
+    """Median ms of one evaluation of ``f`` in CasADi's virtual machine, at small random inputs."""
+    args = [np.random.default_rng(0).normal(size=f.size_in(i)) * 0.01 for i in range(f.n_in())]
+    f(*args)
+    ts = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        f(*args)
+        ts.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(ts))
 
 
 if __name__ == "__main__":

@@ -34,7 +34,8 @@ from latentoc.jump.robot.sagittal_base import base_to_freeflyer
 from latentoc.jump.closure.planted_legs import LegClosure
 from latentoc.jump.demonstration.planted import PlantedTraining, learned_leg, plantable, planted_training
 from latentoc.jump.robot.feet import POINTS, FootGeometry
-from latentoc.jump.schedule.path import METHODS, PATH_SMOOTHING, initial_latent_path, joint_range_path, latent_path, leg_residual_path
+from latentoc.jump.schedule.path import (METHODS, PATH_SMOOTHING, JumpPath, initial_latent_path, joint_range_path,
+                                         latent_path, leg_residual_path)
 from latentoc.jump.schedule.phases import SCHEDULE_ORDER, Phases, toe_path, training_phases
 from latentoc.jump.robot.jump_robot import JumpRobot
 from latentoc.jump.rows import row_blocks
@@ -321,6 +322,18 @@ def _joint_range(problem: Problem, method: str, joint_range_deg: float | None) -
     return joint_range(problem, joint_range_deg)
 
 
+def jump_path(js: JumpSetup, leg_residual: float, joint_range_deg: float | None = None) -> JumpPath:
+    """The path a solve optimises: the joints within +-``joint_range_deg`` of the training fit (the
+    full-space baseline), or the latent path with the left leg's sagittal joints (not the closure's)
+    given a residual of +-``leg_residual`` deg, or the latent path alone (:mod:`.schedule.path`)."""
+    if joint_range_deg is not None:
+        return joint_range_path(js.init["P_joint"], joint_range_deg, antisymmetric_centre(js.smap))
+    if leg_residual > 0:
+        sagittal = [j for j in learned_leg(js.model, js.smap, js.geom) if j not in js.closure.dependent]
+        return leg_residual_path(js.gpdm, js.init["P"], sagittal, leg_residual)
+    return latent_path(GPLayer(js.gpdm), js.init["P"])
+
+
 def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_deg: float | None = None,
                        gpdm: GPDM | None = None, verbose: bool = False, warm_start: Solution | None = None,
                        **overrides: Any) -> Solution:
@@ -338,13 +351,7 @@ def solve_jump_problem(problem: Problem, *, method: str = "latent", joint_range_
     t0 = time.perf_counter()
     js = problem_setup(problem)
     gpdm_time = time.perf_counter() - t0
-    if k is not None:
-        path = joint_range_path(js.init["P_joint"], k, antisymmetric_centre(js.smap))
-    elif o["leg_residual"] > 0:  # the left leg's sagittal joints (not the closure's) get a bounded residual
-        sagittal = [j for j in learned_leg(js.model, js.smap, js.geom) if j not in js.closure.dependent]
-        path = leg_residual_path(js.gpdm, js.init["P"], sagittal, o["leg_residual"])
-    else:
-        path = latent_path(GPLayer(js.gpdm), js.init["P"])
+    path = jump_path(js, o["leg_residual"], k)
     delta = tube_delta(problem.tube, js.gpdm)
     s = settings_from_problem(problem, delta)
     robot = js.robot(s.mu)
