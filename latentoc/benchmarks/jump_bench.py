@@ -69,25 +69,26 @@ def second_gpdm(cache: str) -> int:
 
 def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     """Median ms of each row family's values, local Jacobians and local Hessians at the training
-    start of phase 2's first NLP (every node row, samples on the packaged grids)."""
+    start of phase 2's first NLP (every node row, samples on the packaged grids) on the packaged
+    path (the leg residual's layer)."""
     import numpy as np
 
     from latentoc.jump.schedule.phases import contact_sample_grid, flight_sample_grid
     from latentoc.jump.transcription.nlp import build_nlp, tube_times
-    from latentoc.jump.problem import problem_setup, settings_from_problem
+    from latentoc.jump.problem import jump_path, problem_setup, settings_from_problem
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.solve.initial_point import initial_point
-    from latentoc.latent.gp_layer import GPLayer
     from latentoc.problem.toml_files import load_problem
 
     problem = load_problem("broad-jump")
     js = problem_setup(problem)
     s = settings_from_problem(problem, tube)
-    robot, layer, ph = js.robot(s.mu), GPLayer(js.gpdm), js.phases
+    path = jump_path(js, problem.options["leg_residual"])
+    robot, layer, ph = js.robot(s.mu), path.layer, js.phases
     full = Selection.every_node_row(s.n_stance + s.n_land, robot.unmirrored.size, tube_times(ph, layer))
     selection = full.with_samples(contact_sample_grid(s, ph), flight_sample_grid(s, ph))
-    nlp = build_nlp(robot, layer, js.blocks(robot), ph, s, js.init["P"], "distance", selection)
-    w = initial_point(robot, layer, nlp, ph, js.init["P"], js.init["x_L"])
+    nlp = build_nlp(robot, layer, js.blocks(robot, layer), ph, s, path.P, "distance", selection, path.P_range)
+    w = initial_point(robot, layer, nlp, ph, path.P, js.init["x_L"])
     rows = []
     for f in nlp.nlp.families:
         if f.evaluator is None or not f.K:
