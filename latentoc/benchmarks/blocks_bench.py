@@ -52,7 +52,8 @@ def main(argv: list[str] | None = None) -> int:
         for name, b in blocks.items():
             fns[name] = b.derivative_functions()
             n = {k: f.n_instructions() for k, f in fns[name].items()}
-            ms = {k: _vm_ms(fns[name][k]) for k in ("jac", "hess")}
+            ms = {k: _median_ms(f, [np.random.default_rng(0).normal(size=f.size_in(i)) * 0.01 for i in range(f.n_in())])
+                  for k, f in fns[name].items() if k in ("jac", "hess")}
             print(f"| {name} | {b.n_out} | {b.n_local} | {n['rows']:,} | {n['jac']:,} | {n['hess']:,} | "
                   f"{ms['jac']:.2f} | {ms['hess']:.2f} |", flush=True)
     finally:
@@ -78,20 +79,13 @@ def main(argv: list[str] | None = None) -> int:
                     row.append(f"{time.perf_counter() - t0:.1f}")
                     m = ca.external(f.name(), str(lib)).map(NODES[name])
                     args = [np.random.default_rng(0).random(m.size_in(i)) for i in range(m.n_in())]
-                    m(*args)
-                    ts = []
-                    for _ in range(5):
-                        t0 = time.perf_counter()
-                        m(*args)
-                        ts.append(time.perf_counter() - t0)
-                    evals.append(f"{1e3 * float(np.median(ts)):.1f}")
+                    evals.append(f"{_median_ms(m, args, 5):.1f}")
                 print("| " + " | ".join(row + evals) + " |", flush=True)
     return 0
 
 
-def _vm_ms(f: ca.Function, repeat: int = 20) -> float:
-    """Median ms of one evaluation of ``f`` in CasADi's virtual machine, at small random inputs."""
-    args = [np.random.default_rng(0).normal(size=f.size_in(i)) * 0.01 for i in range(f.n_in())]
+def _median_ms(f: ca.Function, args: list[np.ndarray], repeat: int = 20) -> float:
+    """Median ms of one evaluation of ``f`` at ``args``, after one evaluation not timed."""
     f(*args)
     ts = []
     for _ in range(repeat):

@@ -1,6 +1,6 @@
 """Broad-jump benchmark: the first solve on an empty cache, the solve on a warm one, where its time goes.
 
-Run: ``python -m latentoc bench jump [--tubes 0.02] [--no-first] [--no-second-gpdm] [--families]``;
+Run: ``python -m latentoc bench jump [--tubes DELTA ...] [--no-first] [--no-second-gpdm] [--families]``;
 ``--profile [PROBLEM]``: only the warm solve of PROBLEM (default broad-jump) and where it goes.
 Targets: the first solve <= 3 min with all compilation; a second GPDM on a warm cache compiles
 nothing; the warm solve <= 60 s; a phase-2 Ipopt iteration <= 0.15 s.
@@ -31,12 +31,12 @@ from latentoc.results import load_result
 TARGET_FIRST_S, TARGET_WARM_S, TARGET_PHASE2_ITERATION_S = 180.0, 60.0, 0.15
 
 
-def first_solve(tube: float, cache: str) -> dict:
+def first_solve(tube: float | None, cache: str) -> dict:
     """``latentoc solve broad-jump`` in a subprocess on the (empty) block cache ``cache``."""
     with tempfile.TemporaryDirectory(prefix="latentoc-bench-") as tmp:
         env = {**os.environ, "LATENTOC_CACHE": cache, "LATENTOC_QUIET": "1"}
-        cmd = [sys.executable, "-m", "latentoc", "solve", "broad-jump", "--tube", str(tube), "--quiet",
-               "--keep-failed", "--out", os.path.join(tmp, "out")]
+        cmd = [sys.executable, "-m", "latentoc", "solve", "broad-jump", "--quiet", "--keep-failed",
+               "--out", os.path.join(tmp, "out")] + (["--tube", str(tube)] if tube is not None else [])
         t0 = time.perf_counter()
         run = subprocess.run(cmd, env=env, capture_output=True, text=True)
         wall = time.perf_counter() - t0
@@ -67,7 +67,7 @@ def second_gpdm(cache: str) -> int:
             os.environ["LATENTOC_CACHE"] = old
 
 
-def family_times(tube: float, repeat: int = 5) -> list[tuple]:
+def family_times(tube: float | None, repeat: int = 5) -> list[tuple]:
     """Median ms of each row family's values, local Jacobians and local Hessians at the training
     start of phase 2's first NLP (every node row, samples on the packaged grids) on the packaged
     path (the leg residual's layer)."""
@@ -78,11 +78,12 @@ def family_times(tube: float, repeat: int = 5) -> list[tuple]:
     from latentoc.jump.problem import jump_path, problem_setup, settings_from_problem
     from latentoc.jump.transcription.selection import Selection
     from latentoc.jump.solve.initial_point import initial_point
+    from latentoc.latent.tube import tube_delta
     from latentoc.problem.toml_files import load_problem
 
     problem = load_problem("broad-jump")
     js = problem_setup(problem)
-    s = settings_from_problem(problem, tube)
+    s = settings_from_problem(problem, tube_delta(problem.tube, js.gpdm) if tube is None else tube)
     path = jump_path(js, problem.options["leg_residual"])
     robot, layer, ph = js.robot(s.mu), path.layer, js.phases
     full = Selection.every_node_row(s.n_stance + s.n_land, robot.unmirrored.size, tube_times(ph, layer))
@@ -114,31 +115,32 @@ def main(argv: list[str] | None = None) -> int:
     """Print the first solve, the second GPDM's compilation, then each cold solve."""
     p = argparse.ArgumentParser(prog="jump_bench", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--tubes", nargs="*", type=float, default=[0.02])
+    p.add_argument("--tubes", nargs="*", type=float, default=None, help="the tubes' deltas (default: the problem's)")
     p.add_argument("--no-first", action="store_true", help="skip the first solve on an empty cache")
     p.add_argument("--no-second-gpdm", action="store_true")
     p.add_argument("--families", action="store_true", help="only each row family's evaluation times")
     p.add_argument("--profile", nargs="?", const="broad-jump", metavar="PROBLEM",
                    help="only the warm solve of PROBLEM and where its iterations go")
     a = p.parse_args(argv)
+    tubes = a.tubes or [None]
     if a.families:
         print("| family | nodes | local inputs | values ms | local Jacobians ms | local Hessians ms |")
         print("| --- | --- | --- | --- | --- | --- |")
-        for name, K, n_in, tv, tj, th in family_times(a.tubes[0]):
+        for name, K, n_in, tv, tj, th in family_times(tubes[0]):
             print(f"| {name} | {K} | {n_in} | {tv:.1f} | {tj:.1f} | {th:.1f} |")
         return 0
     print(f"machine: {os.cpu_count()} CPUs, python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.2f}")
     if not a.profile:
         with tempfile.TemporaryDirectory(prefix="latentoc-cache-") as cache:
             if not a.no_first:
-                r = first_solve(a.tubes[0], cache)
+                r = first_solve(tubes[0], cache)
                 print(f"first solve, empty cache (target {TARGET_FIRST_S:.0f} s): {r['wall']:.1f} s wall, of it "
                       f"compiling the robot blocks {r['compile_time_s']:.1f} s; peak RSS {r['rss_mb']:.0f} MB; "
                       f"{r['status']}, {r['distance']:.4f} m")
             if not a.no_second_gpdm and not a.no_first:
                 print(f"second GPDM (every 2nd frame) on that cache: {second_gpdm(cache)} libraries compiled")
-    for tube in a.tubes:
-        warm_solve(a.profile or "broad-jump", tube if a.profile is None or "--tubes" in (argv or []) else None)
+    for tube in tubes:
+        warm_solve(a.profile or "broad-jump", tube)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
