@@ -66,36 +66,40 @@ class SolveProfile:
 
 
 class _Clock:
-    """Seconds per part, counting only the outermost call of a part (a layer calling a layer); a block
-    evaluation's seconds are also kept by its kind and block, with the layer's seconds inside it, to
-    take them out of the block's share."""
+    """Seconds per part (``"layer"``, ``"consistent start"``), counting only the outermost call of a
+    part (a layer calling a layer), and per (block, kind) of robot-block evaluation, the layer's
+    seconds inside an evaluation taken out of it."""
 
     def __init__(self) -> None:
-        self.total: dict[str, float] = defaultdict(float)
+        self.seconds: dict[str, float] = defaultdict(float)
+        self.blocks: dict[tuple[str, str], float] = defaultdict(float)
         self.depth: dict[str, int] = defaultdict(int)
-        self.evaluating: list[str] = []
+        self.evaluating: tuple[str, str] | None = None
 
-    def wrap(self, part: str, fn: Callable, evaluation: str | None = None) -> Callable:
+    def wrap(self, part: str, fn: Callable) -> Callable:
         def timed(*args, **kwargs):
-            key = f"{evaluation} {args[0].block.name}" if evaluation else None
             self.depth[part] += 1
-            if key:
-                self.evaluating.append(key)
             t0 = time.perf_counter()
             try:
                 return fn(*args, **kwargs)
             finally:
                 dt = time.perf_counter() - t0
                 self.depth[part] -= 1
-                if key:
-                    self.evaluating.pop()
-                    self.total[f"evaluation {key}"] += dt
                 if self.depth[part] == 0:
-                    self.total[part] += dt
+                    self.seconds[part] += dt
                     if part == "layer" and self.evaluating:
-                        kind = self.evaluating[-1].split()[0]
-                        self.total[f"layer in {kind}"] += dt
-                        self.total[f"layer in {self.evaluating[-1]}"] += dt
+                        self.blocks[self.evaluating] -= dt
+        return timed
+
+    def wrap_evaluation(self, kind: str, fn: Callable) -> Callable:
+        def timed(evaluator, *args, **kwargs):
+            self.evaluating = (evaluator.block.name, kind)
+            t0 = time.perf_counter()
+            try:
+                return fn(evaluator, *args, **kwargs)
+            finally:
+                self.blocks[self.evaluating] += time.perf_counter() - t0
+                self.evaluating = None
         return timed
 
 
@@ -116,7 +120,7 @@ def profiled() -> Iterator["SolveProfile"]:
     clock, runs, undo = _Clock(), [], []
     for kind in ("values", "jacobian", "hessian"):
         fn = evaluators.BlockEvaluator.__dict__[kind]
-        undo.append(_patch(evaluators.BlockEvaluator, kind, clock.wrap(f"evaluator {kind}", fn, kind)))
+        undo.append(_patch(evaluators.BlockEvaluator, kind, clock.wrap_evaluation(kind, fn)))
     for cls in (gp_layer.GPLayer, gp_layer.IdentityLayer, residual_layer.ResidualLayer):
         for method in ("motion", "curvature", "variance"):
             if method in cls.__dict__:
@@ -127,7 +131,7 @@ def profiled() -> Iterator["SolveProfile"]:
     solve = ipopt.solve
 
     def profiled_solve(*args, **kwargs):
-        before = dict(clock.total)
+        before = dict(clock.blocks), clock.seconds["layer"]
         with tempfile.TemporaryDirectory(prefix="latentoc-profile-") as tmp:
             log = Path(tmp) / "ipopt.txt"
             args = list(args)
@@ -139,22 +143,20 @@ def profiled() -> Iterator["SolveProfile"]:
                 kwargs["options"] = opts
             run = solve(*args, **kwargs)
             timing = ipopt_timing(log.read_text()) if log.exists() else {}
-        d = {k: clock.total[k] - before.get(k, 0.0) for k in clock.total}
-        parts = {f"block {name}": d.get(f"evaluator {kind}", 0.0) - d.get(f"layer in {kind}", 0.0)
+        blocks = {k: v - before[0].get(k, 0.0) for k, v in clock.blocks.items()}
+        parts = {f"block {name}": sum(v for (_, k), v in blocks.items() if k == kind)
                  for kind, name in (("values", "values"), ("jacobian", "Jacobians"), ("hessian", "Hessians"))}
-        parts["latent layer"] = d.get("layer", 0.0)
+        parts["latent layer"] = clock.seconds["layer"] - before[1]
         callbacks = sum(run.timings.values())
         parts["chain rule & assembly"] = callbacks - sum(parts.values())
         parts["MUMPS"] = sum(timing.get(k, 0.0) for k in MUMPS_LINES)
         parts["rest of Ipopt"] = run.time_s - callbacks - parts["MUMPS"]
-        blocks = {(k.split()[2], k.split()[1]): v - d.get("layer in " + k.split(maxsplit=1)[1], 0.0)
-                  for k, v in d.items() if k.startswith("evaluation ")}
         runs.append(IterationProfile(kwargs.get("desc", "ipopt"), run.iterations, run.time_s, parts, blocks))
         return run
 
     undo.append(_patch(ipopt, "solve", profiled_solve))
     try:
-        yield SolveProfile(runs, clock.total)
+        yield SolveProfile(runs, clock.seconds)
     finally:
         for u in reversed(undo):
             u()
