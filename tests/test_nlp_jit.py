@@ -81,10 +81,10 @@ def test_a_damaged_library_is_compiled_again_and_an_index_never_points_outside(t
     entry = json.loads(index.read_text())
     outside = tmp_path.parent / "elsewhere.so"
     outside.write_bytes(libs[1].read_bytes())
-    entry["libraries"] = [str(outside)] * 3
+    entry["libraries"] = [[str(outside)]] * 3
     index.write_text(json.dumps(entry))
     b = compile_blocks([_block("lc_damaged")])[0]
-    assert all(jit.LIBRARY_NAME.fullmatch(n) for n in json.loads(index.read_text())["libraries"])
+    assert all(jit.LIBRARY_NAME.fullmatch(n) for parts in json.loads(index.read_text())["libraries"] for n in parts)
     np.testing.assert_allclose(np.asarray(b.functions["rows"](x, x, x, [0.5])), want, rtol=1e-14)
 
 

@@ -6,8 +6,9 @@ local inputs and the instructions of its rows, local Jacobian and local Hessian
 (:mod:`latentoc.nlp.blocks`) and one evaluation of each in CasADi's virtual machine; ``--newton-steps``:
 the planted leg's closure unrolled with N Newton steps instead of
 :data:`~latentoc.jump.closure.planted_legs.NEWTON_STEPS` (what the unrolling costs); with ``--compile``
-also gcc's time at -O0 and -O1 for each piece and one evaluation mapped over the family's nodes in
-the packaged problem (one thread).
+also gcc's time at -O0 and -O1 for each piece (a hot one in the pieces the package compiles, one
+after another: :mod:`latentoc.nlp.split`) and one evaluation mapped over the family's nodes in the
+packaged problem (one thread).
 """
 from __future__ import annotations
 
@@ -27,7 +28,8 @@ def main(argv: list[str] | None = None) -> int:
     from latentoc.jump.closure import planted_legs
     from latentoc.jump.problem import jump_path, problem_setup
     from latentoc.jump.rows import row_blocks
-    from latentoc.nlp.jit import compiler
+    from latentoc.nlp import split
+    from latentoc.nlp.jit import PIECE_INSTRUCTIONS, compiler
     from latentoc.problem.toml_files import load_problem
 
     p = argparse.ArgumentParser(prog="blocks_bench", description=__doc__,
@@ -61,23 +63,29 @@ def main(argv: list[str] | None = None) -> int:
     if not a.compile:
         return 0
     cc = compiler()
-    print("\n| piece | instructions | gcc -O0 s | gcc -O1 s | map -O0 ms | map -O1 ms |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print("\n| piece | instructions | compiled as | gcc -O0 s | gcc -O1 s | map -O0 ms | map -O1 ms |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as tmp:
         for name, group in fns.items():
             for f in group.values():
-                gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
-                gen.add(f)
-                src = Path(tmp) / f"{f.name()}.c"
-                src.write_text(gen.dump())
-                row = [f.name(), f"{f.n_instructions():,}"]
+                parts = split.split_function(f, PIECE_INSTRUCTIONS) if blocks[name].hot else [f]
+                sources = []
+                for part in parts:
+                    gen = ca.CodeGenerator(f"{part.name()}.c", {"with_header": False})
+                    gen.add(part)
+                    sources.append(Path(tmp) / f"{part.name()}.c")
+                    sources[-1].write_text(gen.dump())
+                row = [f.name(), f"{f.n_instructions():,}", f"{len(parts)} piece{'s' * (len(parts) > 1)}"]
                 evals = []
                 for flag in ("-O0", "-O1"):
-                    lib = Path(tmp) / f"{f.name()}{flag}.so"
                     t0 = time.perf_counter()
-                    subprocess.run([cc, flag, "-shared", "-fPIC", "-o", str(lib), str(src)], check=True)
+                    compiled = []
+                    for part, src in zip(parts, sources):
+                        lib = Path(tmp) / f"{part.name()}{flag}.so"
+                        subprocess.run([cc, flag, "-shared", "-fPIC", "-o", str(lib), str(src)], check=True)
+                        compiled.append(ca.external(part.name(), str(lib)))
                     row.append(f"{time.perf_counter() - t0:.1f}")
-                    m = ca.external(f.name(), str(lib)).map(NODES[name])
+                    m = split.chain(f.name(), compiled).map(NODES[name])
                     args = [np.random.default_rng(0).random(m.size_in(i)) for i in range(m.n_in())]
                     evals.append(f"{_median_ms(m, args, 5):.1f}")
                 print("| " + " | ".join(row + evals) + " |", flush=True)

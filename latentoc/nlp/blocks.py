@@ -40,7 +40,7 @@ import casadi as ca
 import numpy as np
 
 from latentoc.runtime.progress import bar
-from latentoc.nlp import jit, upgrade
+from latentoc.nlp import jit, split, upgrade
 
 __all__ = ["RobotBlock", "MappedCall", "block_inputs", "compile_blocks", "compile_seconds"]
 
@@ -53,7 +53,7 @@ def compile_seconds() -> float:
     return _COMPILE_SECONDS[0]
 
 # bump when the derivative Functions made from the same rows change: the cache index keys on it
-BLOCK_VERSION = "2"
+BLOCK_VERSION = "3"
 PIECES = ("rows", "jac", "hess")
 
 
@@ -145,7 +145,8 @@ class RobotBlock:
         """Piece ``which`` mapped over K nodes, called on numpy arrays (:class:`MappedCall`)."""
         key = (which, K)
         if key not in self._maps:
-            self._maps[key] = MappedCall(jit.node_map(self.function(which), K, self.instructions.get(which, 0)))
+            f = self.function(which)
+            self._maps[key] = MappedCall(jit.node_map(f, K, self.instructions.get(which, 0), not f.is_a("SXFunction")))
         return self._maps[key]
 
 
@@ -191,14 +192,27 @@ class MappedCall:
 
 def _index_file(block: RobotBlock) -> Path:
     key = "\0".join([block.rows_sx.serialize(), str(block.latent_dim), BLOCK_VERSION, jit.CASADI_VERSION,
-                     str(jit.compiler()), str(block.hot), *jit.JIT_FLAGS, *jit.ONCE_FLAGS, str(jit.LARGE_FUNCTION),
+                     str(jit.compiler()), str(block.hot), *jit.JIT_FLAGS, *jit.ONCE_FLAGS, str(jit.PIECE_INSTRUCTIONS),
                      *(["identity"] if block.identity else [])])
     return jit.cache_dir() / f"rb_{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
 
 
-def _load(block: RobotBlock, libs: list[str]) -> dict[str, ca.Function]:
+def _load(block: RobotBlock, libs: list[list[str]]) -> dict[str, ca.Function]:
+    """The compiled pieces (their libraries ``libs``, one list per piece) chained (:mod:`.split`)."""
     names = {"rows": block.name, "jac": f"{block.name}_jac", "hess": f"{block.name}_hess"}
-    return {k: ca.external(n, lib) for (k, n), lib in zip(names.items(), libs)}
+    out = {}
+    for (k, n), parts in zip(names.items(), libs):
+        ext = [ca.external(n if len(parts) == 1 else f"{n}_p{i}", lib) for i, lib in enumerate(parts)]
+        out[k] = split.chain(n, ext)
+    return out
+
+
+def _cached_libraries(entry: dict) -> list[list[str]] | None:
+    """The verified libraries a cache index names, one list per piece; None if any is missing."""
+    libs = [[jit.cached_library(name) for name in parts] for parts in entry["libraries"]]
+    if len(libs) != len(PIECES) or any(lib is None for parts in libs for lib in parts):
+        return None
+    return [[str(lib) for lib in parts] for parts in libs]
 
 
 def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
@@ -212,9 +226,9 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
             continue
         try:  # the index names its libraries; they are looked up in the cache and verified
             entry = json.loads(_index_file(b).read_text())
-            cached = [jit.cached_library(name) for name in entry["libraries"]]
-            if len(cached) == 3 and all(lib is not None for lib in cached):
-                b.functions = _load(b, [str(lib) for lib in cached])
+            cached = _cached_libraries(entry)
+            if cached is not None:
+                b.functions = _load(b, cached)
                 b.instructions = {str(k): int(v) for k, v in dict(entry.get("instructions", {})).items()}
                 continue
         except (OSError, ValueError, KeyError, TypeError, AttributeError):
@@ -231,39 +245,45 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
 
 
 def _compile(todo: list[RobotBlock]) -> None:
-    """Build, compile (or find compiled) and load the derivative libraries of the blocks ``todo``; a
-    large hot piece's quick library first, its optimised one in the background (:mod:`.upgrade`)."""
+    """Build, compile (or find compiled) and load the derivative libraries of the blocks ``todo``: a
+    hot Function in pieces (:mod:`.split`), each large hot piece's quick library first and its
+    optimised one in the background (:mod:`.upgrade`)."""
     fns: dict[str, dict[str, ca.Function]] = {}
-    futures: dict[str, list] = {}
-    later: dict[str, dict[int, tuple[str, tuple[str, ...], str]]] = {}  # block -> piece -> its optimised build
+    futures: dict[str, list[list]] = {}  # block -> Function -> its pieces' libraries
+    later: dict[str, dict[tuple[int, int], tuple[str, tuple[str, ...], str]]] = {}  # (Function, piece) -> optimised build
     with jit.Compiler() as cc:
         for b in bar(todo, desc="building the robot blocks' derivatives", unit="block"):
             fns[b.name] = b.derivative_functions()
             futures[b.name], later[b.name] = [], {}
             for i, f in enumerate(fns[b.name].values()):
-                gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
-                gen.add(f)
-                source, flags = gen.dump(), jit.flags_for(f, b.hot)
-                final = jit.library_path(source, flags).name
-                if upgrade.quick_first(f.n_instructions(), flags) and jit.cached_library(final) is None:
-                    later[b.name][i] = (source, flags, final)
-                    flags = jit.ONCE_FLAGS
-                futures[b.name].append(cc.submit(f.name(), source, flags))
+                futures[b.name].append([])
+                parts = split.split_function(f, jit.PIECE_INSTRUCTIONS) if b.hot else [f]
+                for j, part in enumerate(parts):
+                    gen = ca.CodeGenerator(f"{part.name()}.c", {"with_header": False})
+                    gen.add(part)
+                    source, flags = gen.dump(), jit.flags_for(b.hot)
+                    final = jit.library_path(source, flags).name
+                    if upgrade.quick_first(part.n_instructions(), flags) and jit.cached_library(final) is None:
+                        later[b.name][i, j] = (source, flags, final)
+                        flags = jit.ONCE_FLAGS
+                    futures[b.name][i].append(cc.submit(part.name(), source, flags))
     for b in todo:
-        built: list[Path | None] = [f.result() for f in futures[b.name]]
-        libs = [lib for lib in built if lib is not None]
-        if len(libs) < len(built):
+        built: list[list[Path | None]] = [[f.result() for f in parts] for parts in futures[b.name]]
+        if any(lib is None for parts in built for lib in parts):
             b.functions = fns[b.name]
             continue
+        libs: list[list[Path]] = built  # type: ignore[assignment]  # none is None
         index = _index_file(b)
         tmp = index.with_name(f".{index.name}.{os.getpid()}")
         b.instructions = {k: f.n_instructions() for k, f in fns[b.name].items()}
-        entry: dict[str, Any] = {"block": b.name, "libraries": [p.name for p in libs], "instructions": b.instructions}
+        entry: dict[str, Any] = {"block": b.name, "libraries": [[p.name for p in parts] for parts in libs],
+                                 "instructions": b.instructions}
         tmp.write_text(json.dumps(entry))
         os.replace(tmp, index)
-        b.functions = _load(b, [str(p) for p in libs])
+        b.functions = _load(b, [[str(p) for p in parts] for parts in libs])
         if later[b.name]:
-            optimised = [later[b.name][i][2] if i in later[b.name] else lib.name for i, lib in enumerate(libs)]
+            optimised = [[later[b.name][i, j][2] if (i, j) in later[b.name] else lib.name for j, lib in enumerate(parts)]
+                         for i, parts in enumerate(libs)]
             upgrade.start(index, {**entry, "libraries": optimised}, list(later[b.name].values()))
 
 

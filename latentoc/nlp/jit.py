@@ -32,16 +32,17 @@ CASADI_VERSION: str = getattr(ca, "__version__")  # a key of the cached librarie
 
 __all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "node_map"]
 
-JIT_FLAGS = ("-O1",)  # code evaluated at every Ipopt iteration over many nodes: half the time of -O0
+JIT_FLAGS = ("-O1",)  # code evaluated at every Ipopt iteration over many nodes: a half to an eighth of -O0's time
 ONCE_FLAGS = ("-O0",)  # code whose evaluation costs little (one node): the quickest compile
-# gcc's optimiser is superlinear on long straight-line code: past this size -O0 even where it is hot
-LARGE_FUNCTION = 600_000
+# gcc's optimiser is superlinear on long straight-line code: hot Functions longer than this are
+# compiled as pieces of about this length (:mod:`latentoc.nlp.split`)
+PIECE_INSTRUCTIONS = 250_000
 
 
-def flags_for(f: ca.Function, hot: bool = True) -> tuple[str, ...]:
-    """Compiler flags for Function ``f``: -O1 when ``hot`` (evaluated at many nodes every
-    iteration) and not huge, else -O0 (docs/derivatives.md)."""
-    return JIT_FLAGS if hot and f.n_instructions() <= LARGE_FUNCTION else ONCE_FLAGS
+def flags_for(hot: bool = True) -> tuple[str, ...]:
+    """Compiler flags: -O1 for ``hot`` code (evaluated at many nodes every iteration, in pieces of
+    at most about :data:`PIECE_INSTRUCTIONS`), else -O0 (docs/derivatives.md)."""
+    return JIT_FLAGS if hot else ONCE_FLAGS
 
 
 def compiler() -> str | None:
@@ -59,12 +60,12 @@ def enabled() -> bool:
 THREADED_WORK = 2_000_000  # instructions per mapped call below which threads cost more than they share
 
 
-def node_map(f: ca.Function, K: int, instructions: int = 0) -> ca.Function:
+def node_map(f: ca.Function, K: int, instructions: int = 0, compiled: bool = True) -> ca.Function:
     """``f`` mapped over K nodes, on :func:`~latentoc.runtime.threads.mapped_threads` threads when f
-    is compiled (in CasADi's virtual machine threads are slower) and the call does enough work
+    is ``compiled`` (in CasADi's virtual machine threads are slower) and the call does enough work
     (``instructions`` per node)."""
     n = mapped_threads()
-    if K > 1 and n > 1 and f.class_name() == "External" and K * instructions >= THREADED_WORK:
+    if K > 1 and n > 1 and compiled and K * instructions >= THREADED_WORK:
         return f.map(K, "thread", min(n, K))
     return f.map(K)
 
