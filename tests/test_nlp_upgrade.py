@@ -7,7 +7,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from latentoc.nlp import jit, upgrade
+from latentoc.nlp import blocks, jit, upgrade
 from latentoc.nlp.blocks import RobotBlock, block_inputs, compile_blocks
 
 
@@ -68,3 +68,24 @@ def test_settle_waits_for_an_upgrade_it_did_not_start(tmp_path, monkeypatch):
     final = _names(index)  # settled: the index already names the -O1 ones
     assert not set(final) & set(quick) and all(jit.cached_library(name) is not None for name in final)
     upgrade.wait()
+
+
+def test_the_process_switches_to_the_optimised_libraries_when_they_are_built(tmp_path, monkeypatch):
+    """A block compiled quickly keeps evaluating; once the detached build has rewritten its index,
+    its next mapped call loads the optimised libraries (named by the index), with the same values."""
+    monkeypatch.setenv("LATENTOC_CACHE", str(tmp_path))
+    monkeypatch.delenv("LATENTOC_JIT", raising=False)
+    if jit.compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setattr(upgrade, "QUICK_FIRST", 0)
+    monkeypatch.setattr(blocks, "UPGRADE_POLL_S", 0.0)
+    b = compile_blocks([_block()])[0]
+    index = next(tmp_path.glob("rb_*.json"))
+    quick = _names(index)
+    assert [n for parts in b.libraries for n in parts] == quick and b.upgrading == index
+    args = [np.full(3, 0.3), np.full(3, -0.2), np.full(3, 0.1), np.full(1, 0.5)]
+    before = b.mapped("rows", 1)(*args)
+    upgrade.wait()
+    after = b.mapped("rows", 1)(*args)
+    assert [n for parts in b.libraries for n in parts] == _names(index) != quick and b.upgrading is None
+    assert all(np.array_equal(x, y) for x, y in zip(before, after))

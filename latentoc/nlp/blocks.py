@@ -55,6 +55,7 @@ def compile_seconds() -> float:
 # bump when the derivative Functions made from the same rows change: the cache index keys on it
 BLOCK_VERSION = "3"
 PIECES = ("rows", "jac", "hess")
+UPGRADE_POLL_S = 2.0  # s between looks at a block's cache index while its optimised libraries are built
 
 
 def block_inputs(D: int, n_extra: int) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
@@ -75,6 +76,9 @@ class RobotBlock:
     functions: dict[str, ca.Function] = field(default_factory=dict, repr=False)
     instructions: dict[str, int] = field(default_factory=dict, repr=False)  # of the compiled pieces
     _maps: dict = field(default_factory=dict, repr=False)
+    libraries: list[list[str]] = field(default_factory=list, repr=False)  # the loaded pieces' library names
+    upgrading: Path | None = field(default=None, repr=False)  # the index a background build will rewrite
+    _polled: float = field(default=0.0, repr=False)
 
     @classmethod
     def from_parts(cls, name: str, inputs: tuple[ca.SX, ca.SX, ca.SX, ca.SX], parts: dict[str, ca.SX],
@@ -143,11 +147,33 @@ class RobotBlock:
 
     def mapped(self, which: str, K: int) -> "MappedCall":
         """Piece ``which`` mapped over K nodes, called on numpy arrays (:class:`MappedCall`)."""
+        if self.upgrading is not None:
+            self._load_upgrade()
         key = (which, K)
         if key not in self._maps:
             f = self.function(which)
             self._maps[key] = MappedCall(jit.node_map(f, K, self.instructions.get(which, 0), not f.is_a("SXFunction")))
         return self._maps[key]
+
+
+    def _load_upgrade(self) -> None:
+        """Once the background build (:mod:`.upgrade`) has rewritten the cache index, load the
+        optimised libraries it names (the same values bit for bit); the index is read at most every
+        :data:`UPGRADE_POLL_S` s."""
+        now = time.monotonic()
+        if now - self._polled < UPGRADE_POLL_S or self.upgrading is None:
+            return
+        self._polled = now
+        try:
+            entry = json.loads(self.upgrading.read_text())
+            if entry["libraries"] == self.libraries:
+                return
+            libs = _cached_libraries(entry)
+        except (OSError, ValueError, KeyError, TypeError):
+            return
+        if libs is not None:
+            self.functions, self.libraries, self.upgrading = _load(self, libs), entry["libraries"], None
+            self._maps.clear()
 
 
 class MappedCall:
@@ -228,7 +254,7 @@ def compile_blocks(blocks: list[RobotBlock]) -> list[RobotBlock]:
             entry = json.loads(_index_file(b).read_text())
             cached = _cached_libraries(entry)
             if cached is not None:
-                b.functions = _load(b, cached)
+                b.functions, b.libraries = _load(b, cached), entry["libraries"]
                 b.instructions = {str(k): int(v) for k, v in dict(entry.get("instructions", {})).items()}
                 continue
         except (OSError, ValueError, KeyError, TypeError, AttributeError):
@@ -280,11 +306,12 @@ def _compile(todo: list[RobotBlock]) -> None:
                                  "instructions": b.instructions}
         tmp.write_text(json.dumps(entry))
         os.replace(tmp, index)
-        b.functions = _load(b, [[str(p) for p in parts] for parts in libs])
+        b.functions, b.libraries = _load(b, [[str(p) for p in parts] for parts in libs]), entry["libraries"]
         if later[b.name]:
             optimised = [[later[b.name][i, j][2] if (i, j) in later[b.name] else lib.name for j, lib in enumerate(parts)]
                          for i, parts in enumerate(libs)]
             upgrade.start(index, {**entry, "libraries": optimised}, list(later[b.name].values()))
+            b.upgrading = index
 
 
 def stack_tangents(G: np.ndarray) -> np.ndarray:

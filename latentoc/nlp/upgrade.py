@@ -1,8 +1,9 @@
 """Optimised libraries built in the background: a hot piece of :data:`QUICK_FIRST` instructions or
 more is compiled at once with ``-O0`` and then with ``-O1`` by a detached process that outlives the
 command (gcc's optimiser takes five times as long: the arm's Hessian piece 1.4 s at -O0, 6.8 s at
--O1); when that library is in the cache, the process rewrites the block's cache index to name it
-and the next solve loads it. Both compile the same C, whose values do not depend on the
+-O1); when that library is in the cache, the process rewrites the block's cache index to name it:
+the process that started it switches to it there (:meth:`~latentoc.nlp.blocks.RobotBlock.mapped`),
+later ones load it. Both compile the same C, whose values do not depend on the
 optimisation level (no fast-math, no fused multiply-add on the baseline x86-64).
 
 A Ctrl-C does not reach the detached process (a session of its own); if it is killed, the index
