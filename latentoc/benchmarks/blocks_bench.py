@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     from latentoc.jump.problem import jump_path, problem_setup
     from latentoc.jump.rows import row_blocks
     from latentoc.nlp import split
-    from latentoc.nlp.jit import PIECE_INSTRUCTIONS, compiler
+    from latentoc.nlp.jit import c_source, compiler
     from latentoc.problem.toml_files import load_problem
 
     p = argparse.ArgumentParser(prog="blocks_bench", description=__doc__,
@@ -69,13 +69,11 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for name, group in fns.items():
             for f in group.values():
-                parts = split.split_function(f, PIECE_INSTRUCTIONS) if blocks[name].hot else [f]
+                parts = blocks[name].compiled_parts(f)
                 sources = []
                 for part in parts:
-                    gen = ca.CodeGenerator(f"{part.name()}.c", {"with_header": False})
-                    gen.add(part)
                     sources.append(Path(tmp) / f"{part.name()}.c")
-                    sources[-1].write_text(gen.dump())
+                    sources[-1].write_text(c_source(part))
                 row = [f.name(), f"{f.n_instructions():,}", f"{len(parts)} piece{'s' * (len(parts) > 1)}"]
                 evals = []
                 for flag in ("-O0", "-O1"):

@@ -145,6 +145,11 @@ class RobotBlock:
             self.functions.update(self.derivative_functions((which,), cse=False))
         return self.functions[which]
 
+    def compiled_parts(self, f: ca.Function) -> list[ca.Function]:
+        """The Functions derivative Function ``f`` is compiled as: pieces (:mod:`.split`) when the
+        block is hot, else ``f`` whole."""
+        return split.split_function(f, jit.PIECE_INSTRUCTIONS) if self.hot else [f]
+
     def mapped(self, which: str, K: int) -> "MappedCall":
         """Piece ``which`` mapped over K nodes, called on numpy arrays (:class:`MappedCall`)."""
         if self.upgrading is not None:
@@ -155,13 +160,12 @@ class RobotBlock:
             self._maps[key] = MappedCall(jit.node_map(f, K, self.instructions.get(which, 0), not f.is_a("SXFunction")))
         return self._maps[key]
 
-
     def _load_upgrade(self) -> None:
         """Once the background build (:mod:`.upgrade`) has rewritten the cache index, load the
         optimised libraries it names (the same values bit for bit); the index is read at most every
         :data:`UPGRADE_POLL_S` s."""
         now = time.monotonic()
-        if now - self._polled < UPGRADE_POLL_S or self.upgrading is None:
+        if self.upgrading is None or now - self._polled < UPGRADE_POLL_S:
             return
         self._polled = now
         try:
@@ -228,7 +232,7 @@ def _load(block: RobotBlock, libs: list[list[str]]) -> dict[str, ca.Function]:
     names = {"rows": block.name, "jac": f"{block.name}_jac", "hess": f"{block.name}_hess"}
     out = {}
     for (k, n), parts in zip(names.items(), libs):
-        ext = [ca.external(n if len(parts) == 1 else f"{n}_p{i}", lib) for i, lib in enumerate(parts)]
+        ext = [ca.external(n if len(parts) == 1 else split.piece_name(n, i), lib) for i, lib in enumerate(parts)]
         out[k] = split.chain(n, ext)
     return out
 
@@ -283,11 +287,8 @@ def _compile(todo: list[RobotBlock]) -> None:
             futures[b.name], later[b.name] = [], {}
             for i, f in enumerate(fns[b.name].values()):
                 futures[b.name].append([])
-                parts = split.split_function(f, jit.PIECE_INSTRUCTIONS) if b.hot else [f]
-                for j, part in enumerate(parts):
-                    gen = ca.CodeGenerator(f"{part.name()}.c", {"with_header": False})
-                    gen.add(part)
-                    source, flags = gen.dump(), jit.flags_for(b.hot)
+                for j, part in enumerate(b.compiled_parts(f)):
+                    source, flags = jit.c_source(part), jit.flags_for(b.hot)
                     final = jit.library_path(source, flags).name
                     if upgrade.quick_first(part.n_instructions(), flags) and jit.cached_library(final) is None:
                         later[b.name][i, j] = (source, flags, final)

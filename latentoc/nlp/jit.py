@@ -30,7 +30,7 @@ from latentoc.runtime.threads import mapped_threads
 
 CASADI_VERSION: str = getattr(ca, "__version__")  # a key of the cached libraries
 
-__all__ = ["JIT_FLAGS", "cache_dir", "compiler", "enabled", "Compiler", "node_map"]
+__all__ = ["JIT_FLAGS", "c_source", "cache_dir", "compiler", "enabled", "Compiler", "node_map"]
 
 JIT_FLAGS = ("-O1",)  # code evaluated at every Ipopt iteration over many nodes: a half to an eighth of -O0's time
 ONCE_FLAGS = ("-O0",)  # code whose evaluation costs little (one node): the quickest compile
@@ -43,6 +43,13 @@ def flags_for(hot: bool = True) -> tuple[str, ...]:
     """Compiler flags: -O1 for ``hot`` code (evaluated at many nodes every iteration, in pieces of
     at most about :data:`PIECE_INSTRUCTIONS`), else -O0 (docs/derivatives.md)."""
     return JIT_FLAGS if hot else ONCE_FLAGS
+
+
+def c_source(f: ca.Function) -> str:
+    """The C source of Function ``f`` as a library of its own (no header)."""
+    gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+    gen.add(f)
+    return gen.dump()
 
 
 def compiler() -> str | None:

@@ -13,7 +13,12 @@ from __future__ import annotations
 
 import casadi as ca
 
-__all__ = ["split_function", "chain"]
+__all__ = ["split_function", "chain", "piece_name"]
+
+
+def piece_name(name: str, i: int) -> str:
+    """The name of piece ``i`` of the Function ``name`` (its symbol in a compiled library)."""
+    return f"{name}_p{i}"
 
 
 def _live_after_cuts(f: ca.Function, cuts: set[int]) -> dict[int, list[int]]:
@@ -79,7 +84,7 @@ def split_function(f: ca.Function, size: int) -> list[ca.Function]:
         else:
             res = [ca.SX(f.sparsity_out(i), ca.vertcat(*o)) for i, o in enumerate(outs)]
             names = f.name_out()
-        pieces.append(ca.Function(f"{f.name()}_p{len(pieces)}", ins + [c], res, f.name_in() + ["carried_in"], names))
+        pieces.append(ca.Function(piece_name(f.name(), len(pieces)), ins + [c], res, f.name_in() + ["carried_in"], names))
         start = end
     return pieces
 
